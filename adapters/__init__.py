@@ -1,0 +1,1 @@
+"""Hardware adapter plugins for plansys-bridge (installed as ``plansys_bridge_adapters``)."""

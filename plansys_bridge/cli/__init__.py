@@ -1,0 +1,46 @@
+"""The ``plansys-bridge`` command line.
+
+Each subcommand lives in its own module exposing ``register(subparsers)``; the
+module is imported only when listed here, so a missing optional dependency of one
+command never breaks the others.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+from plansys_bridge.errors import PlansysBridgeError
+
+SUBCOMMANDS = ("validate", "plan", "run", "experiment", "terminal", "demo")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="plansys-bridge",
+        description="Plan and execute robot missions the PlanSys2 way.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name in SUBCOMMANDS:
+        module = importlib.import_module(f"plansys_bridge.cli.{name}_cmd")
+        module.register(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        code: int = args.func(args)
+    except PlansysBridgeError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+    return code
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

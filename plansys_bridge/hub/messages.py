@@ -1,0 +1,142 @@
+"""Hub messages with PlanSys2's field names and constants (plansys2_msgs).
+
+Field names, constants and types match the ROS 2 messages so that a recorded run can
+be written to a bag as ``plansys2_msgs/msg/...`` and read by ROS tools, and so that a
+PlanSys2 user recognises every field. Stamps are float seconds of the hub's clock
+(a ROS ``builtin_interfaces/Time`` is produced when writing bags).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import IntEnum
+
+
+class ExecutionType(IntEnum):
+    """``ActionExecution.type`` (int16 in ROS)."""
+
+    REQUEST = 1
+    RESPONSE = 2
+    CONFIRM = 3
+    REJECT = 4
+    FEEDBACK = 5
+    FINISH = 6
+    CANCEL = 7
+
+
+class ActionStatus(IntEnum):
+    """``ActionExecutionInfo.status``."""
+
+    NOT_EXECUTED = 1
+    EXECUTING = 2
+    FAILED = 3
+    SUCCEEDED = 4
+    CANCELLED = 5
+
+
+class PerformerState(IntEnum):
+    """``ActionPerformerStatus.state``."""
+
+    NOT_READY = 0
+    READY = 1
+    RUNNING = 2
+    FAILURE = 4
+
+
+@dataclass(frozen=True)
+class ActionExecution:
+    """One auction / execution message on ``actions_hub``.
+
+    ``node_id`` is the performer's node name (empty on a REQUEST). ``bid`` is this
+    project's extension for best-bid auctions: a performer's cost for the action
+    (``None``: no cost given, the PlanSys2 first-responder rule applies).
+    ``request_id`` identifies one action instance so two plans that run the same
+    action text at once are never confused; PlanSys2 matches on the action text
+    alone, which is what an empty ``request_id`` means.
+    """
+
+    type: ExecutionType
+    node_id: str
+    action: str
+    arguments: tuple[str, ...] = ()
+    success: bool = False
+    completion: float = 0.0
+    status: str = ""
+    bid: float | None = None
+    request_id: str = ""
+
+
+@dataclass(frozen=True)
+class ActionExecutionInfo:
+    """Per-action execution state, published on ``action_execution_info``."""
+
+    status: ActionStatus
+    start_stamp: float
+    status_stamp: float
+    action_full_name: str
+    action: str
+    arguments: tuple[str, ...] = ()
+    duration: float = 0.0
+    completion: float = 0.0
+    message_status: str = ""
+
+
+@dataclass(frozen=True)
+class ActionPerformerStatus:
+    """Performer heartbeat (1 s), published on ``performers_status``."""
+
+    status_stamp: float
+    state: PerformerState
+    action: str
+    specialized_arguments: tuple[str, ...] = ()
+    node_name: str = ""
+
+
+@dataclass(frozen=True)
+class PlanItem:
+    time: float
+    action: str
+    """The grounded action text, e.g. ``"(move r2d2 a b)"``."""
+    duration: float
+
+
+@dataclass(frozen=True)
+class Plan:
+    items: tuple[PlanItem, ...] = ()
+
+
+@dataclass(frozen=True)
+class Knowledge:
+    """Snapshot of the problem expert, published on every change."""
+
+    instances: tuple[str, ...] = ()
+    predicates: tuple[str, ...] = ()
+    functions: tuple[str, ...] = ()
+    goal: str = ""
+
+
+@dataclass(frozen=True)
+class DotGraph:
+    """The plan's DOT text coloured by action state, on ``dot_graph``."""
+
+    text: str
+    plan_id: str = ""
+
+
+@dataclass(frozen=True)
+class ExecutingPlan:
+    """The plan being executed, on ``executing_plan``."""
+
+    plan: Plan = field(default_factory=Plan)
+    plan_id: str = ""
+
+
+class Topics:
+    """Topic names as PlanSys2 uses them (a DDS transport prefixes ``rt/``)."""
+
+    ACTIONS_HUB = "actions_hub"
+    PERFORMERS_STATUS = "performers_status"
+    ACTION_EXECUTION_INFO = "action_execution_info"
+    EXECUTING_PLAN = "executing_plan"
+    KNOWLEDGE = "problem_expert/knowledge"
+    DOT_GRAPH = "dot_graph"

@@ -1,0 +1,1 @@
+"""plansys_bridge.knowledge."""
