@@ -1,0 +1,1 @@
+"""mavlink adapter."""

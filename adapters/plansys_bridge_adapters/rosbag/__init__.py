@@ -1,0 +1,1 @@
+"""rosbag adapter."""
