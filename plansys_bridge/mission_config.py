@@ -1,0 +1,180 @@
+"""Mission files: the YAML a user writes to run a mission with ``plansys-bridge run``.
+
+The file is validated completely on load, before any performer starts or any
+hardware is touched: a typo in a key is an error naming that key
+(``mission.yaml: performers[1].acions: unknown key``), never a silently ignored
+setting. Performer entries are checked twice: the common keys here, the
+kind-specific settings by the performer plugin's own ``from_config``.
+Relative paths are resolved against the folder of the YAML file.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from plansys_bridge.errors import ConfigError
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class ClockConfig(_Strict):
+    """``wall`` runs in real time; ``virtual`` jumps over idle time (tests, experiments)."""
+
+    kind: Literal["wall", "virtual"] = "wall"
+    time_scale: float = Field(1.0, gt=0)
+    """Every action duration is multiplied by this (0.05 runs 20x faster)."""
+
+
+class TransportConfig(_Strict):
+    kind: Literal["inprocess"] = "inprocess"
+
+
+class ReplanningConfig(_Strict):
+    max_replans: int = Field(3, ge=0)
+
+
+class AuctionConfig(_Strict):
+    selection: Literal["first", "best_bid"] = "first"
+    retry_period: float = Field(1.0, gt=0)
+    give_up_after: float = Field(30.0, gt=0)
+    bid_window: float = Field(0.05, ge=0)
+    liveness_timeout: float = Field(5.0, gt=0)
+    reauctions: int = Field(1, ge=0)
+
+
+class ExecutorConfig(_Strict):
+    at_start_timeout: float | None = Field(30.0, gt=0)
+    overrun_percentage: float | None = Field(None, gt=0)
+
+
+class KnowledgeConfig(_Strict):
+    """Initial knowledge given inline instead of (or on top of) a problem file."""
+
+    instances: dict[str, str] = Field(default_factory=dict)
+    predicates: list[str] = Field(default_factory=list)
+    functions: list[str] = Field(default_factory=list)
+
+
+class EventConfig(_Strict):
+    """A change to the knowledge at a mission time, e.g. a battery drop."""
+
+    at: float = Field(ge=0)
+    add_predicate: str | None = None
+    remove_predicate: str | None = None
+    set_function: str | None = None
+
+    @model_validator(mode="after")
+    def _exactly_one(self) -> EventConfig:
+        given = [
+            k for k in ("add_predicate", "remove_predicate", "set_function") if getattr(self, k)
+        ]
+        if len(given) != 1:
+            raise ValueError(
+                "an event needs exactly one of add_predicate, remove_predicate, set_function"
+            )
+        return self
+
+
+class PerformerEntry(BaseModel):
+    """Common keys of a performer; the plugin validates the rest."""
+
+    model_config = ConfigDict(extra="allow", frozen=True)
+    kind: str
+    name: str
+
+
+class MissionConfig(_Strict):
+    name: str = "mission"
+    domain: list[str]
+    problem: str | None = None
+    knowledge: KnowledgeConfig = Field(default_factory=KnowledgeConfig)
+    goal: str | None = None
+    performers: list[PerformerEntry] = Field(min_length=1)
+    transport: TransportConfig = Field(default_factory=TransportConfig)
+    clock: ClockConfig = Field(default_factory=ClockConfig)
+    replanning: ReplanningConfig = Field(default_factory=ReplanningConfig)
+    auction: AuctionConfig = Field(default_factory=AuctionConfig)
+    executor: ExecutorConfig = Field(default_factory=ExecutorConfig)
+    events: list[EventConfig] = Field(default_factory=list)
+    record: str | None = None
+    """Write the whole run to this ROS 2 bag (mcap)."""
+    timeout: float | None = Field(None, gt=0)
+    """Give up the mission after this many seconds of mission time."""
+
+    base_dir: Path = Path(".")
+    source: str = "<mission>"
+
+    @field_validator("domain", mode="before")
+    @classmethod
+    def _domain_list(cls, value: Any) -> Any:
+        return [value] if isinstance(value, str) else value
+
+    @model_validator(mode="after")
+    def _has_goal(self) -> MissionConfig:
+        if self.problem is None and self.goal is None:
+            raise ValueError("a mission needs a problem file or a goal")
+        names = [p.name for p in self.performers]
+        dupes = sorted({n for n in names if names.count(n) > 1})
+        if dupes:
+            raise ValueError(f"performer names must be unique, repeated: {', '.join(dupes)}")
+        return self
+
+    def resolve(self, path: str) -> Path:
+        """A path from the file, relative to the file's folder."""
+        p = Path(path).expanduser()
+        return p if p.is_absolute() else (self.base_dir / p).resolve()
+
+    @property
+    def domain_paths(self) -> list[Path]:
+        return [self.resolve(d) for d in self.domain]
+
+
+def _key_path(loc: tuple[int | str, ...]) -> str:
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        else:
+            out += ("." if out else "") + str(part)
+    return out
+
+
+def mission_from_dict(
+    data: Any, *, source: str = "<mission>", base_dir: Path | None = None
+) -> MissionConfig:
+    """Validate a mission mapping; errors name the first offending key."""
+    if not isinstance(data, dict):
+        raise ConfigError("a mission file must be a mapping of keys", file=source)
+    for reserved in ("base_dir", "source"):
+        if reserved in data:
+            raise ConfigError("unknown key", key=reserved, file=source)
+    try:
+        return MissionConfig.model_validate(
+            {**data, "base_dir": base_dir or Path("."), "source": source}
+        )
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        msg = "unknown key" if err["type"] == "extra_forbidden" else err["msg"]
+        raise ConfigError(msg, key=_key_path(err["loc"]) or None, file=source) from exc
+
+
+def load_mission(path: str | Path) -> MissionConfig:
+    """Read and validate a mission YAML file."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ConfigError(f"cannot read mission file: {exc.strerror}", file=str(p)) from exc
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"{p}:{mark.line + 1}:{mark.column + 1}" if mark is not None else str(p)
+        raise ConfigError(f"not valid YAML: {getattr(exc, 'problem', exc)}", file=where) from exc
+    return mission_from_dict(data, source=str(p), base_dir=p.resolve().parent)
