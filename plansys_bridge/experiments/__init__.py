@@ -1,0 +1,1 @@
+"""Experiments that reproduce and extend the PlanSys2 paper's measurements."""
