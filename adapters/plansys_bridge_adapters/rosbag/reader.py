@@ -1,0 +1,306 @@
+"""Streaming reads of robot poses from ROS 1 and ROS 2 bags.
+
+One reader serves ROS 1 bags (``.bag``) and ROS 2 bags (a rosbag2 directory, or a
+bare ``.mcap`` / ``.db3`` file), through rosbags' ``AnyReader``. Messages are read one
+at a time from the bag's chunks, so memory stays flat whatever the bag's size.
+
+ROS 1 messages are converted to their ROS 2 types on the fly (CDR bytes of the
+ROS 2 Humble definition: the ROS 1 header's ``seq`` disappears, the rest keeps its
+wire layout), which is the bridging a ROS 1 robot needs when a ROS 2 planner drives
+it. Every sample keeps those CDR bytes, so the pose can be written to a ROS 2 bag or
+re-published without serialising it again.
+
+Failures are :class:`~.errors.BagError` subclasses naming the bag, the topic and the
+timestamp of the last message read correctly.
+"""
+
+from __future__ import annotations
+
+import lzma
+import math
+import struct
+import zlib
+from collections.abc import Iterator
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+from types import TracebackType
+from typing import TYPE_CHECKING, Any
+
+from rosbags.highlevel import AnyReader, AnyReaderError
+from rosbags.rosbag1 import ReaderError as Ros1ReaderError
+from rosbags.rosbag2 import ReaderError as Ros2ReaderError
+from rosbags.serde import SerdeError
+from rosbags.typesys import Stores, TypesysError, get_typestore
+
+from .errors import BagCorruptError, BagError, BagTopicError, BagTypeError
+
+try:  # rosbags decompresses mcap chunks with zstd (backport before Python 3.14)
+    from compression.zstd import ZstdError  # type: ignore[import-not-found,unused-ignore]
+except ImportError:  # pragma: no cover - depends on the Python version
+    from backports.zstd import ZstdError  # type: ignore[import-not-found,no-redef,unused-ignore]
+
+if TYPE_CHECKING:
+    from rosbags.interfaces import Connection
+    from rosbags.typesys.store import Typestore
+
+ODOMETRY = "nav_msgs/msg/Odometry"
+POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
+POSE_WITH_COVARIANCE_STAMPED = "geometry_msgs/msg/PoseWithCovarianceStamped"
+POSE_TYPES = frozenset({ODOMETRY, POSE_STAMPED, POSE_WITH_COVARIANCE_STAMPED})
+"""Message types a pose can be taken from."""
+
+# What a damaged file raises from inside rosbags, its storage backends and the
+# decompressors of bag chunks. Anything here, met while reading, means "corrupt".
+_READ_ERRORS: tuple[type[BaseException], ...] = (
+    AnyReaderError,
+    Ros1ReaderError,
+    Ros2ReaderError,
+    SerdeError,
+    TypesysError,
+    struct.error,
+    EOFError,
+    OSError,
+    ValueError,
+    KeyError,
+    IndexError,
+    AssertionError,
+    zlib.error,
+    lzma.LZMAError,
+    ZstdError,
+    RuntimeError,  # lz4 frame errors
+)
+
+
+@cache
+def ros2_typestore() -> Typestore:
+    """The ROS 2 Humble type store every message is converted to (built once)."""
+    return get_typestore(Stores.ROS2_HUMBLE)
+
+
+def yaw_from_quaternion(qx: float, qy: float, qz: float, qw: float) -> float:
+    """Heading (rotation about z) in radians, in (-pi, pi]."""
+    return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+
+
+@dataclass(frozen=True)
+class PoseSample:
+    """One pose read from a bag.
+
+    ``bag_time_ns`` is the bag's record time (what replay timing follows);
+    ``stamp`` is the message header stamp in seconds (the robot's clock then).
+    ``cdr`` holds the message as ROS 2 CDR bytes of type ``msgtype``.
+    """
+
+    bag_time_ns: int
+    stamp: float
+    frame_id: str
+    x: float
+    y: float
+    z: float
+    qx: float
+    qy: float
+    qz: float
+    qw: float
+    msgtype: str
+    cdr: bytes
+
+    @property
+    def yaw(self) -> float:
+        return yaw_from_quaternion(self.qx, self.qy, self.qz, self.qw)
+
+    def message(self) -> Any:
+        """The ROS 2 message object (decoded from ``cdr`` on demand)."""
+        return ros2_typestore().deserialize_cdr(self.cdr, self.msgtype)
+
+
+@dataclass(frozen=True)
+class RawMessage:
+    """One message as ROS 2 CDR bytes, with its bag time and type."""
+
+    topic: str
+    msgtype: str
+    bag_time_ns: int
+    cdr: bytes
+
+
+def pose_from_message(msg: Any, msgtype: str, bag_time_ns: int, cdr: bytes) -> PoseSample:
+    """Extract the pose of an Odometry / PoseStamped / PoseWithCovarianceStamped."""
+    pose = msg.pose if msgtype == POSE_STAMPED else msg.pose.pose
+    stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+    p, q = pose.position, pose.orientation
+    return PoseSample(
+        bag_time_ns=bag_time_ns,
+        stamp=stamp,
+        frame_id=msg.header.frame_id,
+        x=float(p.x),
+        y=float(p.y),
+        z=float(p.z),
+        qx=float(q.x),
+        qy=float(q.y),
+        qz=float(q.z),
+        qw=float(q.w),
+        msgtype=msgtype,
+        cdr=cdr,
+    )
+
+
+class BagReader:
+    """An open ROS 1 or ROS 2 bag; a context manager.
+
+    ``messages()`` and ``poses()`` are generators that read the bag lazily; they may
+    be called several times (each call reads the bag again from the window start).
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self._reader: AnyReader | None = None
+
+    # -- lifecycle ---------------------------------------------------------------
+    def open(self) -> BagReader:
+        if not self.path.exists():
+            raise BagError("bag not found", self.path)
+        if self.path.is_file() and self.path.suffix not in {".bag", ".mcap", ".db3"}:
+            raise BagError(
+                f"unknown bag format {self.path.suffix!r} (expected .bag, .mcap, .db3 "
+                "or a rosbag2 directory)",
+                self.path,
+            )
+        try:
+            reader = AnyReader([self.path], default_typestore=ros2_typestore())
+            reader.open()
+        except _READ_ERRORS as exc:
+            raise BagCorruptError(
+                f"cannot open bag (truncated or damaged?): {exc}", self.path
+            ) from exc
+        self._reader = reader
+        return self
+
+    def close(self) -> None:
+        reader, self._reader = self._reader, None
+        if reader is not None:
+            try:
+                reader.close()
+            except _READ_ERRORS as exc:
+                raise BagCorruptError(f"error while closing bag: {exc}", self.path) from exc
+
+    def __enter__(self) -> BagReader:
+        return self.open()
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    @property
+    def reader(self) -> AnyReader:
+        if self._reader is None:
+            raise BagError("bag is not open", self.path)
+        return self._reader
+
+    # -- metadata ----------------------------------------------------------------
+    @property
+    def is_ros1(self) -> bool:
+        return not self.reader.is2
+
+    @property
+    def start_ns(self) -> int:
+        return int(self.reader.start_time)
+
+    @property
+    def end_ns(self) -> int:
+        return int(self.reader.end_time)
+
+    @property
+    def topics(self) -> dict[str, str]:
+        """Topic name -> message type (ROS 2 spelling, e.g. ``nav_msgs/msg/Odometry``)."""
+        return {c.topic: c.msgtype for c in self.reader.connections}
+
+    def message_count(self, topic: str) -> int:
+        return sum(c.msgcount for c in self._connections(topic))
+
+    def _connections(self, topic: str) -> list[Connection]:
+        conns = [c for c in self.reader.connections if c.topic == topic]
+        if not conns:
+            known = ", ".join(sorted(self.topics)) or "none"
+            raise BagTopicError(f"topic not in bag (topics: {known})", self.path, topic)
+        return conns
+
+    def msgtype(self, topic: str) -> str:
+        types = {c.msgtype for c in self._connections(topic)}
+        if len(types) != 1:
+            raise BagTypeError(f"topic has several types: {sorted(types)}", self.path, topic)
+        return types.pop()
+
+    # -- reading -----------------------------------------------------------------
+    def messages(
+        self, topic: str, start_ns: int | None = None, stop_ns: int | None = None
+    ) -> Iterator[RawMessage]:
+        """Messages of ``topic`` in ``[start_ns, stop_ns)`` as ROS 2 CDR bytes."""
+        conns = self._connections(topic)
+        msgtype = self.msgtype(topic)
+        store = ros2_typestore()
+        if msgtype not in store.fielddefs:
+            raise BagTypeError(
+                f"message type {msgtype} is unknown to ROS 2 Humble", self.path, topic
+            )
+        reader = self.reader
+        ros1 = self.is_ros1
+        last: int | None = None
+        it = reader.messages(conns, start=start_ns, stop=stop_ns)
+        while True:
+            try:
+                item = next(it)
+            except StopIteration:
+                return
+            except _READ_ERRORS as exc:
+                raise BagCorruptError(
+                    f"bag truncated or damaged after the last good message: {exc}",
+                    self.path,
+                    topic,
+                    last,
+                ) from exc
+            _conn, timestamp, raw = item
+            try:
+                cdr = bytes(store.ros1_to_cdr(raw, msgtype)) if ros1 else bytes(raw)
+            except _READ_ERRORS as exc:
+                raise BagCorruptError(
+                    f"message cannot be decoded as {msgtype}: {exc}", self.path, topic, timestamp
+                ) from exc
+            last = timestamp
+            yield RawMessage(topic, msgtype, timestamp, cdr)
+
+    def poses(
+        self, topic: str, start_ns: int | None = None, stop_ns: int | None = None
+    ) -> Iterator[PoseSample]:
+        """Poses of ``topic`` (Odometry, PoseStamped or PoseWithCovarianceStamped)."""
+        msgtype = self.msgtype(topic)
+        if msgtype not in POSE_TYPES:
+            raise BagTypeError(
+                f"type {msgtype} carries no pose (expected one of {sorted(POSE_TYPES)})",
+                self.path,
+                topic,
+            )
+        store = ros2_typestore()
+        for raw in self.messages(topic, start_ns, stop_ns):
+            try:
+                msg = store.deserialize_cdr(raw.cdr, msgtype)
+            except _READ_ERRORS as exc:
+                raise BagCorruptError(
+                    f"message cannot be decoded as {msgtype}: {exc}",
+                    self.path,
+                    topic,
+                    raw.bag_time_ns,
+                ) from exc
+            yield pose_from_message(msg, msgtype, raw.bag_time_ns, raw.cdr)
+
+
+def read_poses(
+    path: str | Path, topic: str, start_ns: int | None = None, stop_ns: int | None = None
+) -> Iterator[PoseSample]:
+    """Open ``path``, stream the poses of ``topic``, close the bag when done."""
+    with BagReader(path) as bag:
+        yield from bag.poses(topic, start_ns, stop_ns)
