@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import yaml
+
 from plansys_bridge.errors import ConfigError
 
 from .errors import BagError
@@ -194,8 +196,12 @@ class Route:
         Each entry: ``arguments`` (list; ``""``/``"*"`` wildcard), optional ``action``,
         ``bag`` (relative to ``base_dir``) and ``topic`` (or performer-level defaults),
         optional ``start``/``end`` seconds after the bag's first message, optional
-        ``name``. Wrong keys or values raise ConfigError naming ``key[i].field``.
+        ``name``. ``entries`` may also be the path (relative to ``base_dir``) of a YAML
+        file holding that list, such as the ``*.segments.yaml`` the bag generator
+        writes. Wrong keys or values raise ConfigError naming ``key[i].field``.
         """
+        if isinstance(entries, str):
+            entries = _load_segments_file(base_dir / entries, key)
         if not isinstance(entries, list) or not entries:
             raise ConfigError("expected a non-empty list of segments", key=key)
         allowed = {"arguments", "action", "bag", "topic", "start", "end", "name"}
@@ -240,6 +246,15 @@ class Route:
                 )
             )
         return cls(segments)
+
+
+def _load_segments_file(path: Path, key: str) -> Any:
+    try:
+        return yaml.safe_load(path.read_text())
+    except OSError as exc:
+        raise ConfigError(f"cannot read segments file {path}: {exc}", key=key) from exc
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"segments file {path} is not valid YAML: {exc}", key=key) from exc
 
 
 def _seconds(value: Any, key: str) -> float | None:
