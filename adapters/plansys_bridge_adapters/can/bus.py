@@ -1,0 +1,260 @@
+"""A python-can bus for asyncio code: open from config, read, classify, send.
+
+The interface and channel are configuration (``virtual`` in tests, ``socketcan`` /
+``can0`` on a robot); nothing else in the adapter knows which. Received frames are
+sorted here into three streams for a :class:`FrameListener`: decoded DBC frames,
+CAN error frames, and bus errors (the driver failing). Everything else that arrives
+(unknown IDs, wrong DLC, remote frames, out-of-range signals) is counted in
+:class:`BusCounters` and logged with a back-off, and never reaches the listener:
+a noisy bus must not crash or confuse the adapter.
+
+Two readers:
+
+- ``notifier``: python-can's :class:`can.Notifier` feeding an
+  :class:`can.AsyncBufferedReader`. On SocketCAN it watches the socket's file
+  descriptor from the event loop; on other interfaces it uses python-can's reader
+  thread. This is the choice on a robot.
+- ``poll``: a task on the event loop drains ``bus.recv(0)`` every ``poll_period``.
+  No threads, so it runs in virtual time (the project's VirtualClock) and tests are
+  deterministic; the cost is up to ``poll_period`` of added latency.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections import Counter
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal, Protocol
+
+import can
+
+from plansys_bridge.errors import AdapterError
+
+from .dbc import Frame, MalformedFrame, MobileBaseDbc
+
+_LOG = logging.getLogger(__name__)
+
+ReaderKind = Literal["auto", "notifier", "poll"]
+
+
+class BusOpenError(AdapterError):
+    """The CAN interface could not be opened (missing driver, link down, bad channel)."""
+
+
+class BusSendError(AdapterError):
+    """A frame could not be sent (bus-off, TX buffer full, interface gone)."""
+
+
+@dataclass(frozen=True)
+class BusConfig:
+    """Where and how to reach the CAN bus."""
+
+    interface: str = "virtual"
+    channel: str = "plansys_can0"
+    bitrate: int | None = None
+    reader: ReaderKind = "auto"
+    poll_period: float = 0.002
+    send_timeout: float = 0.05
+    options: Mapping[str, Any] = field(default_factory=dict)
+    """Extra keyword arguments for :class:`can.Bus` (e.g. ``fd``, ``receive_own_messages``)."""
+
+    def describe(self) -> str:
+        return f"{self.interface}:{self.channel}"
+
+
+@dataclass
+class BusCounters:
+    """What went over the bus; malformed frames by kind (``unknown_id``, ``bad_dlc``, ...)."""
+
+    received: int = 0
+    decoded: int = 0
+    sent: int = 0
+    error_frames: int = 0
+    send_errors: int = 0
+    bus_errors: int = 0
+    malformed: Counter[str] = field(default_factory=Counter)
+
+    @property
+    def malformed_total(self) -> int:
+        return sum(self.malformed.values())
+
+
+class FrameListener(Protocol):
+    """Receives what the bus client sorted out, always on the event loop."""
+
+    def on_frame(self, frame: Frame) -> None: ...
+
+    def on_error_frame(self, msg: can.Message) -> None: ...
+
+    def on_bus_error(self, exc: Exception) -> None: ...
+
+
+class _BusErrorMarker:
+    """Put into the reader's queue when python-can's reader thread fails."""
+
+    def __init__(self, exc: Exception) -> None:
+        self.exc = exc
+
+
+class _LoopReader(can.AsyncBufferedReader):
+    """AsyncBufferedReader that also forwards reader-thread errors into the queue."""
+
+    def on_error(self, exc: Exception) -> None:
+        self.buffer.put_nowait(_BusErrorMarker(exc))  # type: ignore[arg-type]
+
+
+def describe_frame(msg: can.Message) -> str:
+    """Short text of a raw frame for logs: ``0x123 [3] 01 02 03`` (extended IDs: 8 digits)."""
+    width = 8 if msg.is_extended_id else 3
+    frame_id = f"0x{msg.arbitration_id:0{width}X}"
+    kind = " remote" if msg.is_remote_frame else ""
+    return f"{frame_id}{kind} [{len(msg.data)}] {bytes(msg.data).hex(' ')}".rstrip()
+
+
+class CanBusClient:
+    """One python-can bus, its reader, and the DBC classification of its frames."""
+
+    def __init__(self, config: BusConfig, dbc: MobileBaseDbc, listener: FrameListener) -> None:
+        self.config = config
+        self.dbc = dbc
+        self.listener = listener
+        self.counters = BusCounters()
+        self._bus: can.BusABC | None = None
+        self._notifier: can.Notifier | None = None
+        self._reader: _LoopReader | None = None
+        self._task: asyncio.Task[None] | None = None
+        self._closing = False
+
+    @property
+    def is_open(self) -> bool:
+        return self._bus is not None
+
+    async def open(self, reader: ReaderKind | None = None) -> None:
+        """Open the interface and start reading (``reader`` overrides the config)."""
+        if self._bus is not None:
+            return
+        kind = reader or self.config.reader
+        if kind == "auto":
+            kind = "notifier"
+        kwargs: dict[str, Any] = dict(self.config.options)
+        if self.config.bitrate is not None:
+            kwargs["bitrate"] = self.config.bitrate
+        try:
+            bus = can.Bus(interface=self.config.interface, channel=self.config.channel, **kwargs)
+        except (can.CanError, OSError, ValueError, ImportError, TypeError) as exc:
+            raise BusOpenError(
+                f"cannot open CAN bus {self.config.describe()}: {exc}"
+            ) from exc
+        self._bus = bus
+        self._closing = False
+        loop = asyncio.get_running_loop()
+        if kind == "notifier":
+            self._reader = _LoopReader()
+            self._notifier = can.Notifier(bus, [self._reader], timeout=0.1, loop=loop)
+            self._task = loop.create_task(self._pump_notifier(self._reader))
+        else:
+            self._task = loop.create_task(self._poll(bus))
+
+    async def close(self) -> None:
+        """Stop reading and shut the interface down; safe to call twice."""
+        self._closing = True
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+            self._task = None
+        if self._notifier is not None:
+            notifier = self._notifier
+            self._notifier = None
+            # Joining python-can's reader thread blocks for up to its timeout.
+            await asyncio.get_running_loop().run_in_executor(None, notifier.stop, 1.0)
+        if self._bus is not None:
+            bus = self._bus
+            self._bus = None
+            bus.shutdown()
+
+    def send_frame(self, frame: Frame) -> None:
+        """Encode with the DBC and send; a failure raises :class:`BusSendError`."""
+        self.send_raw(self.dbc.encode(frame))
+
+    def send_raw(self, msg: can.Message) -> None:
+        if self._bus is None:
+            raise BusSendError(f"CAN bus {self.config.describe()} is not open")
+        try:
+            self._bus.send(msg, timeout=self.config.send_timeout)
+        except can.CanError as exc:
+            self.counters.send_errors += 1
+            raise BusSendError(
+                f"CAN bus {self.config.describe()}: cannot send {describe_frame(msg)}: {exc}"
+            ) from exc
+        self.counters.sent += 1
+
+    def dispatch(self, msg: can.Message) -> None:
+        """Classify one received frame and hand it to the listener (or count it)."""
+        self.counters.received += 1
+        if msg.is_error_frame:
+            self.counters.error_frames += 1
+            self.listener.on_error_frame(msg)
+            return
+        try:
+            frame = self.dbc.decode(msg)
+        except MalformedFrame as exc:
+            self._count_malformed(exc, msg)
+            return
+        self.counters.decoded += 1
+        self.listener.on_frame(frame)
+
+    def _count_malformed(self, exc: MalformedFrame, msg: can.Message) -> None:
+        self.counters.malformed[exc.kind] += 1
+        count = self.counters.malformed[exc.kind]
+        # Log the 1st, 2nd, 4th, 8th, ... of each kind: visible, but a flood stays quiet.
+        level = logging.WARNING if count & (count - 1) == 0 else logging.DEBUG
+        _LOG.log(
+            level,
+            "%s: ignored malformed frame %s (%s; %d %s so far)",
+            self.config.describe(),
+            describe_frame(msg),
+            exc,
+            count,
+            exc.kind,
+        )
+
+    def _bus_failed(self, exc: Exception) -> None:
+        self.counters.bus_errors += 1
+        _LOG.error("%s: bus error: %s", self.config.describe(), exc)
+        self.listener.on_bus_error(exc)
+
+    def _dispatch_safely(self, msg: can.Message) -> None:
+        try:
+            self.dispatch(msg)
+        except Exception:
+            # A listener bug must not stop the reader: every later frame would be lost.
+            _LOG.exception("%s: error handling %s", self.config.describe(), describe_frame(msg))
+
+    async def _pump_notifier(self, reader: _LoopReader) -> None:
+        while True:
+            item: object = await reader.get_message()
+            if isinstance(item, _BusErrorMarker):
+                self._bus_failed(item.exc)
+                continue
+            assert isinstance(item, can.Message)
+            self._dispatch_safely(item)
+
+    async def _poll(self, bus: can.BusABC) -> None:
+        period = self.config.poll_period
+        while not self._closing:
+            try:
+                # Drain what is queued, but yield after a burst so a flood cannot starve the loop.
+                for _ in range(256):
+                    msg = bus.recv(0)
+                    if msg is None:
+                        break
+                    self._dispatch_safely(msg)
+            except can.CanError as exc:
+                self._bus_failed(exc)
+                await asyncio.sleep(max(period, 0.1))
+                continue
+            await asyncio.sleep(period)
