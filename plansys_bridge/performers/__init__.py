@@ -1,1 +1,19 @@
-"""plansys_bridge.performers."""
+"""plansys_bridge.performers: the performer base class, the plugin registry, the simulator."""
+
+from plansys_bridge.performers.base import (
+    ActionFailed,
+    ActionGoal,
+    ActionPerformer,
+    PerformerConfig,
+    PerformerContext,
+    arguments_match,
+)
+
+__all__ = [
+    "ActionFailed",
+    "ActionGoal",
+    "ActionPerformer",
+    "PerformerConfig",
+    "PerformerContext",
+    "arguments_match",
+]

@@ -1,0 +1,544 @@
+"""The performer base class: implement ``execute()``, the framework does the rest.
+
+A performer is what turns an action of the plan into work on a robot. The framework
+here owns the whole PlanSys2 protocol on the performer's side, so an adapter writer
+implements one coroutine and never touches the auction:
+
+* it answers a REQUEST only when idle, not committed to another auction, serving that
+  action name, and when ``specialized_arguments`` match position by position (an
+  empty string matches anything), exactly PlanSys2's rule;
+* after a RESPONSE it is *committed*: it bids nowhere else until CONFIRM or REJECT
+  arrives, or until ``commit_timeout`` passes, so a lost CONFIRM never wedges it;
+* CONFIRM starts ``execute(goal)`` as a task; returning sends FINISH(success),
+  raising :class:`ActionFailed` sends FINISH(failure) with its message, any other
+  exception sends FINISH(failure) naming the exception and the performer stays up;
+* CANCEL cancels the task (``asyncio.CancelledError`` inside ``execute``), then
+  ``on_cancel(goal)`` runs (stop the motors); no FINISH follows a cancel;
+* a heartbeat (:class:`ActionPerformerStatus`) goes out every ``heartbeat_period``
+  and on every state change, which is what the executor's liveness check watches.
+
+Performers never change the knowledge: the executor applies the action's effects.
+Adapters may publish telemetry (e.g. a battery level) into the knowledge.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from plansys_bridge.clock import Clock
+from plansys_bridge.errors import ConfigError, HubError, PlansysBridgeError
+from plansys_bridge.hub.hub import Hub
+from plansys_bridge.hub.messages import (
+    ActionExecution,
+    ActionPerformerStatus,
+    ExecutionType,
+    PerformerState,
+    Topics,
+)
+from plansys_bridge.hub.transport import Subscription
+
+if TYPE_CHECKING:
+    from plansys_bridge.knowledge.problem_expert import ProblemExpert
+
+__all__ = [
+    "ActionFailed",
+    "ActionGoal",
+    "ActionPerformer",
+    "PerformerConfig",
+    "PerformerContext",
+    "arguments_match",
+]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class ActionGoal:
+    """One action instance handed to a performer."""
+
+    action: str
+    arguments: tuple[str, ...]
+    request_id: str
+
+    @property
+    def full_name(self) -> str:
+        return "(" + " ".join((self.action, *self.arguments)) + ")"
+
+
+class ActionFailed(PlansysBridgeError):
+    """Raise from ``execute()`` to finish the action unsuccessfully with this message."""
+
+
+@dataclass
+class PerformerContext:
+    """What a performer may use: the hub, the clock, the knowledge, where its files are."""
+
+    hub: Hub
+    clock: Clock
+    knowledge: ProblemExpert | None = None
+    base_dir: Path = field(default_factory=Path)
+    recorder: object | None = None
+
+
+def arguments_match(specialized: Sequence[str], arguments: Sequence[str]) -> bool:
+    """PlanSys2's rule: compare position by position, ``""`` matches anything.
+
+    No specialised arguments matches every call. Lengths may differ (PlanSys2 only
+    warns): the positions both have are compared.
+    """
+    return all(s == "" or s == a for s, a in zip(specialized, arguments, strict=False))
+
+
+@dataclass(frozen=True)
+class PerformerConfig:
+    """A mission file's performer entry after the common keys were checked."""
+
+    kind: str
+    name: str
+    actions: dict[str, tuple[str, ...]]
+    heartbeat_period: float
+    commit_timeout: float
+    settings: dict[str, Any]
+    """Kind-specific settings, only keys the class declares in ``settings_keys``."""
+    key: str
+    """Where the entry is in the mission file, e.g. ``performers[2]``."""
+
+
+_COMMON_KEYS = ("kind", "name", "actions", "heartbeat_period", "commit_timeout")
+
+
+class ActionPerformer(ABC):
+    """Base class of every performer; subclasses implement :meth:`execute`."""
+
+    settings_keys: ClassVar[frozenset[str]] = frozenset()
+    """Extra mission-file keys this kind accepts; passed to ``__init__`` as keywords."""
+
+    def __init__(
+        self,
+        context: PerformerContext,
+        node_name: str,
+        actions: Mapping[str, Sequence[str]],
+        *,
+        heartbeat_period: float = 1.0,
+        commit_timeout: float = 2.0,
+    ) -> None:
+        if not node_name:
+            raise ValueError("a performer needs a non-empty node_name")
+        if not actions:
+            raise ValueError(f"performer {node_name!r} serves no action")
+        if not heartbeat_period > 0:
+            raise ValueError(f"heartbeat_period must be > 0, got {heartbeat_period!r}")
+        if not commit_timeout > 0:
+            raise ValueError(f"commit_timeout must be > 0, got {commit_timeout!r}")
+        self.context = context
+        self.hub = context.hub
+        self.clock = context.clock
+        self.node_name = node_name
+        self.actions: dict[str, tuple[str, ...]] = {
+            name: tuple(args) for name, args in actions.items()
+        }
+        self.heartbeat_period = float(heartbeat_period)
+        self.commit_timeout = float(commit_timeout)
+        self.state = PerformerState.NOT_READY
+        self.goal: ActionGoal | None = None
+        """The goal being executed (None when idle)."""
+        self.completion = 0.0
+        self.executed = 0
+        """Goals started so far."""
+        self._committed: ActionGoal | None = None
+        self._committed_bid: float | None = None
+        self._commit_timer: asyncio.TimerHandle | None = None
+        self._task: asyncio.Task[None] | None = None
+        self._cancelling = False
+        self._subs: list[Subscription] = []
+        self._heartbeat_task: asyncio.Task[None] | None = None
+        self._running = False
+
+    # ------------------------------------------------------------------ hooks
+
+    async def setup(self) -> None:
+        """Optional: connect to the hardware before the performer takes part in auctions."""
+        return None
+
+    async def teardown(self) -> None:
+        """Optional: release the hardware after the performer stopped."""
+        return None
+
+    def bid(self, goal: ActionGoal) -> float | None:
+        """Optional cost for best-bid auctions; ``math.inf`` means "do not answer"."""
+        return None
+
+    def accepts(self, goal: ActionGoal) -> bool:
+        """Optional extra filter run after the action and argument checks."""
+        return True
+
+    @abstractmethod
+    async def execute(self, goal: ActionGoal) -> str | None:
+        """Do the action. Return = success (the text is FINISH's status).
+
+        Raise :class:`ActionFailed` to fail. A cancel arrives as
+        ``asyncio.CancelledError``; let it propagate after any quick clean-up.
+        """
+
+    async def on_cancel(self, goal: ActionGoal) -> None:
+        """Optional: stop the hardware after ``goal`` was cancelled."""
+        return None
+
+    # ------------------------------------------------------------------ lifecycle
+
+    @property
+    def running(self) -> bool:
+        return self._running
+
+    @property
+    def busy(self) -> bool:
+        return self._task is not None
+
+    @property
+    def committed(self) -> ActionGoal | None:
+        return self._committed
+
+    async def start(self) -> None:
+        """Run ``setup()``, subscribe to the hub and start the heartbeat."""
+        if self._running:
+            return
+        try:
+            await self.setup()
+        except Exception:
+            self.state = PerformerState.FAILURE
+            self._publish_status()
+            raise
+        self._subs = [self.hub.subscribe(Topics.ACTIONS_HUB, self._on_action_msg)]
+        self._running = True
+        self.state = PerformerState.READY
+        self._heartbeat_task = asyncio.get_running_loop().create_task(
+            self._heartbeat(), name=f"{self.node_name}-heartbeat"
+        )
+
+    async def stop(self) -> None:
+        """Cancel the running goal (its ``on_cancel`` runs), stop the heartbeat, ``teardown()``."""
+        if not self._running:
+            return
+        self._running = False
+        for sub in self._subs:
+            sub.close()
+        self._subs = []
+        self._release_commitment()
+        task = self._task
+        if task is not None:
+            self._cancelling = True
+            task.cancel()
+            await asyncio.gather(task, return_exceptions=True)
+        hb = self._heartbeat_task
+        self._heartbeat_task = None
+        if hb is not None:
+            hb.cancel()
+            await asyncio.gather(hb, return_exceptions=True)
+        self.state = PerformerState.NOT_READY
+        self._publish_status()
+        await self.teardown()
+
+    async def __aenter__(self) -> ActionPerformer:
+        await self.start()
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self.stop()
+
+    # ------------------------------------------------------------------ helpers
+
+    def feedback(self, completion: float, status: str = "") -> None:
+        """Send FEEDBACK for the goal being executed (``completion`` in 0..1)."""
+        goal = self.goal
+        if goal is None:
+            raise HubError(f"performer {self.node_name}: feedback() with no goal running")
+        self.completion = min(1.0, max(0.0, float(completion)))
+        self._send(ExecutionType.FEEDBACK, goal, completion=self.completion, status=status)
+
+    def serves(self, goal: ActionGoal) -> bool:
+        """Would this performer answer a REQUEST for ``goal`` when idle?"""
+        spec = self.actions.get(goal.action)
+        return spec is not None and arguments_match(spec, goal.arguments)
+
+    # ------------------------------------------------------------------ protocol
+
+    def _on_action_msg(self, msg: object) -> None:
+        if not isinstance(msg, ActionExecution) or not self._running:
+            return
+        kind = msg.type
+        if kind is ExecutionType.REQUEST:
+            self._on_request(msg)
+        elif msg.node_id != self.node_name:
+            return
+        elif kind is ExecutionType.CONFIRM:
+            self._on_confirm(msg)
+        elif kind is ExecutionType.REJECT:
+            if self._committed is not None and _same(self._committed, msg):
+                self._release_commitment()
+        elif kind is ExecutionType.CANCEL:
+            self._on_cancel_msg(msg)
+
+    def _on_request(self, msg: ActionExecution) -> None:
+        goal = ActionGoal(msg.action, tuple(msg.arguments), msg.request_id)
+        if self._committed is not None:
+            if self._committed == goal:
+                self._respond(goal, self._committed_bid)  # our RESPONSE may have been lost
+            return
+        if self._task is not None or not self.serves(goal):
+            return
+        try:
+            if not self.accepts(goal):
+                return
+            cost = self.bid(goal)
+        except Exception:
+            log.exception("performer %s: bid/accepts for %s raised", self.node_name, goal.full_name)
+            return
+        if cost is not None and (math.isnan(cost) or cost == math.inf):
+            return
+        self._committed = goal
+        self._committed_bid = cost
+        loop = asyncio.get_running_loop()
+        self._commit_timer = loop.call_later(self.commit_timeout, self._commit_expired, goal)
+        self._respond(goal, cost)
+
+    def _respond(self, goal: ActionGoal, cost: float | None) -> None:
+        self._send(ExecutionType.RESPONSE, goal, bid=cost)
+
+    def _commit_expired(self, goal: ActionGoal) -> None:
+        if self._committed == goal:
+            log.info(
+                "performer %s: no CONFIRM/REJECT for %s within %g s; bidding again",
+                self.node_name,
+                goal.full_name,
+                self.commit_timeout,
+            )
+            self._committed = None
+            self._commit_timer = None
+
+    def _release_commitment(self) -> None:
+        self._committed = None
+        if self._commit_timer is not None:
+            self._commit_timer.cancel()
+            self._commit_timer = None
+
+    def _on_confirm(self, msg: ActionExecution) -> None:
+        goal = self._committed
+        if goal is None or not _same(goal, msg):
+            return  # not (or no longer) committed to this request
+        self._release_commitment()
+        self.goal = goal
+        self.completion = 0.0
+        self.executed += 1
+        self.state = PerformerState.RUNNING
+        self._cancelling = False
+        self._task = asyncio.get_running_loop().create_task(
+            self._run_goal(goal), name=f"{self.node_name}:{goal.full_name}"
+        )
+        self._publish_status()
+
+    def _on_cancel_msg(self, msg: ActionExecution) -> None:
+        if self._committed is not None and _same(self._committed, msg):
+            self._release_commitment()
+            return
+        goal, task = self.goal, self._task
+        if goal is None or task is None or not _same(goal, msg) or self._cancelling:
+            return
+        self._cancelling = True
+        task.cancel()
+
+    async def _run_goal(self, goal: ActionGoal) -> None:
+        try:
+            try:
+                status = await self.execute(goal)
+            except asyncio.CancelledError:
+                if not self._cancelling:
+                    raise
+                await self._after_cancel(goal)
+            except ActionFailed as exc:
+                self._finish(goal, False, str(exc) or "failed")
+            except Exception as exc:
+                log.exception("performer %s: %s raised", self.node_name, goal.full_name)
+                self._finish(goal, False, f"{type(exc).__name__}: {exc}")
+            else:
+                self._finish(goal, True, status if status else "succeeded")
+        finally:
+            self._task = None
+            self.goal = None
+            self._cancelling = False
+            if self._running:
+                self.state = PerformerState.READY
+                self._publish_status()
+
+    async def _after_cancel(self, goal: ActionGoal) -> None:
+        try:
+            await self.on_cancel(goal)
+        except Exception:
+            log.exception("performer %s: on_cancel(%s) raised", self.node_name, goal.full_name)
+
+    def _finish(self, goal: ActionGoal, success: bool, status: str) -> None:
+        completion = 1.0 if success else self.completion
+        self._send(
+            ExecutionType.FINISH, goal, success=success, completion=completion, status=status
+        )
+
+    def _send(
+        self,
+        kind: ExecutionType,
+        goal: ActionGoal,
+        *,
+        success: bool = False,
+        completion: float = 0.0,
+        status: str = "",
+        bid: float | None = None,
+    ) -> None:
+        self._publish(
+            Topics.ACTIONS_HUB,
+            ActionExecution(
+                type=kind,
+                node_id=self.node_name,
+                action=goal.action,
+                arguments=goal.arguments,
+                success=success,
+                completion=completion,
+                status=status,
+                bid=bid,
+                request_id=goal.request_id,
+            ),
+        )
+
+    def _publish(self, topic: str, msg: object) -> None:
+        """Every message the performer sends goes through here (fault injection hooks it)."""
+        self.hub.publish(topic, msg)
+
+    def _publish_status(self) -> None:
+        stamp = self.clock.now()
+        for action, spec in self.actions.items():
+            self._publish(
+                Topics.PERFORMERS_STATUS,
+                ActionPerformerStatus(
+                    status_stamp=stamp,
+                    state=self.state,
+                    action=action,
+                    specialized_arguments=spec,
+                    node_name=self.node_name,
+                ),
+            )
+
+    async def _heartbeat(self) -> None:
+        while self._running:
+            self._publish_status()
+            await asyncio.sleep(self.heartbeat_period)
+
+    # ------------------------------------------------------------------ configuration
+
+    @classmethod
+    def parse_config(cls, config: Mapping[str, Any], *, key: str = "performer") -> PerformerConfig:
+        """Check a mission file's performer entry; unknown keys name themselves."""
+        if not isinstance(config, Mapping):
+            raise ConfigError("a performer entry must be a mapping", key=key)
+        allowed = set(_COMMON_KEYS) | set(cls.settings_keys)
+        for entry_key in config:
+            if entry_key not in allowed:
+                raise ConfigError(
+                    f"unknown key for a {cls.__name__} (allowed: {', '.join(sorted(allowed))})",
+                    key=f"{key}.{entry_key}",
+                )
+        kind = config.get("kind", "")
+        if not isinstance(kind, str):
+            raise ConfigError(f"must be a string, got {kind!r}", key=f"{key}.kind")
+        name = config.get("name")
+        if not isinstance(name, str) or not name.strip():
+            raise ConfigError("a performer needs a non-empty string name", key=f"{key}.name")
+        actions = _parse_actions(config.get("actions"), f"{key}.actions")
+        heartbeat = _positive(config.get("heartbeat_period", 1.0), f"{key}.heartbeat_period")
+        commit = _positive(config.get("commit_timeout", 2.0), f"{key}.commit_timeout")
+        settings = {k: v for k, v in config.items() if k not in _COMMON_KEYS}
+        return PerformerConfig(
+            kind=kind,
+            name=name.strip(),
+            actions=actions,
+            heartbeat_period=heartbeat,
+            commit_timeout=commit,
+            settings=settings,
+            key=key,
+        )
+
+    @classmethod
+    def from_config(
+        cls, config: Mapping[str, Any], context: PerformerContext, *, key: str = "performer"
+    ) -> list[ActionPerformer]:
+        """Build the performer(s) a mission entry describes (plugin factory).
+
+        The default passes the kind-specific settings to ``__init__`` as keywords;
+        a kind that needs more (several performers from one entry, file loading)
+        overrides this and starts with :meth:`parse_config`.
+        """
+        parsed = cls.parse_config(config, key=key)
+        try:
+            performer = cls(
+                context,
+                parsed.name,
+                parsed.actions,
+                heartbeat_period=parsed.heartbeat_period,
+                commit_timeout=parsed.commit_timeout,
+                **parsed.settings,
+            )
+        except ConfigError:
+            raise
+        except (TypeError, ValueError) as exc:
+            raise ConfigError(str(exc), key=key) from exc
+        return [performer]
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.node_name} {self.state.name}>"
+
+
+def _same(goal: ActionGoal, msg: ActionExecution) -> bool:
+    """Does ``msg`` talk about ``goal``? (request_id when both have one, else the action text)."""
+    if goal.request_id and msg.request_id and goal.request_id != msg.request_id:
+        return False
+    return goal.action == msg.action and goal.arguments == tuple(msg.arguments)
+
+
+def _positive(value: object, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not value > 0:
+        raise ConfigError(f"must be a number > 0, got {value!r}", key=key)
+    return float(value)
+
+
+def _parse_actions(value: object, key: str) -> dict[str, tuple[str, ...]]:
+    """``actions`` is ``{action: [specialised args]}`` (or a list of action names)."""
+    if value is None:
+        raise ConfigError("missing: the actions this performer serves", key=key)
+    if isinstance(value, list | tuple):
+        value = {name: [] for name in value}
+    if not isinstance(value, Mapping) or not value:
+        raise ConfigError(
+            "must map each action name to its specialised arguments, e.g. {move: [r1]}", key=key
+        )
+    out: dict[str, tuple[str, ...]] = {}
+    for action, args in value.items():
+        if not isinstance(action, str) or not action.strip():
+            raise ConfigError(f"action names must be strings, got {action!r}", key=key)
+        where = f"{key}.{action}"
+        if args is None:
+            args = []
+        if isinstance(args, str) or not isinstance(args, list | tuple):
+            raise ConfigError(
+                f'specialised arguments must be a list ("" = any), got {args!r}', key=where
+            )
+        spec: list[str] = []
+        for i, arg in enumerate(args):
+            text = "" if arg is None else arg
+            if not isinstance(text, str):
+                raise ConfigError(f"must be a string, got {arg!r}", key=f"{where}[{i}]")
+            spec.append(text.strip().lower())
+        out[action.strip().lower()] = tuple(spec)
+    return out

@@ -1,0 +1,110 @@
+"""Performer kinds are plugins found through the ``plansys_bridge.performers`` entry points.
+
+A mission names a performer ``kind`` (``simulated``, ``mavlink``, ``can``, ``rosbag``,
+or one a third-party package registers); the class is imported only when a mission
+asks for it, so a missing optional dependency (pymavlink for ``mavlink``) costs
+nothing until then and is reported as one clear error saying which extra to install.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Mapping, Sequence
+from importlib.metadata import EntryPoint, entry_points
+from typing import Any
+
+from plansys_bridge.errors import ConfigError, PluginError
+from plansys_bridge.performers.base import ActionPerformer, PerformerContext
+
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "available_performer_kinds",
+    "load_performer_kind",
+    "performers_from_config",
+]
+
+ENTRY_POINT_GROUP = "plansys_bridge.performers"
+
+# Top-level module of an optional dependency -> the extra that installs it.
+_EXTRA_FOR_MODULE = {
+    "pymavlink": "mavlink",
+    "can": "can",
+    "cantools": "can",
+    "rosbags": "rosbag",
+    "mcap": "rosbag",
+    "cyclonedds": "dds",
+}
+
+
+def _entry_points() -> dict[str, EntryPoint]:
+    return {ep.name: ep for ep in entry_points(group=ENTRY_POINT_GROUP)}
+
+
+def available_performer_kinds() -> list[str]:
+    """Names of the performer kinds installed (importable or not)."""
+    return sorted(_entry_points())
+
+
+@functools.cache
+def load_performer_kind(kind: str) -> type[ActionPerformer]:
+    """The performer class registered as ``kind``; PluginError if unknown or not importable."""
+    eps = _entry_points()
+    ep = eps.get(kind)
+    if ep is None:
+        known = ", ".join(sorted(eps)) or "none installed"
+        raise PluginError(f"unknown performer kind {kind!r} (known kinds: {known})")
+    try:
+        obj = ep.load()
+    except ModuleNotFoundError as exc:
+        missing = (exc.name or "").split(".")[0]
+        extra = _EXTRA_FOR_MODULE.get(missing)
+        if extra is None and missing in ("plansys_bridge", "plansys_bridge_adapters"):
+            raise PluginError(
+                f"performer kind {kind!r} points at {ep.value}, which does not exist: {exc}"
+            ) from exc
+        hint = (
+            f"install it with: pip install 'plansys-bridge[{extra}]'"
+            if extra
+            else f"install the package that provides {missing!r}"
+        )
+        raise PluginError(
+            f"performer kind {kind!r} needs the optional dependency {missing!r}; {hint}"
+        ) from exc
+    except (ImportError, AttributeError) as exc:
+        raise PluginError(
+            f"performer kind {kind!r} could not be loaded from {ep.value}: {exc}"
+        ) from exc
+    if not (isinstance(obj, type) and issubclass(obj, ActionPerformer)):
+        raise PluginError(
+            f"performer kind {kind!r} ({ep.value}) is not an ActionPerformer subclass"
+        )
+    return obj
+
+
+def performers_from_config(
+    entries: Sequence[Mapping[str, Any]], context: PerformerContext, *, key: str = "performers"
+) -> list[ActionPerformer]:
+    """Build every performer of a mission's ``performers:`` list, errors naming the entry."""
+    performers: list[ActionPerformer] = []
+    names: dict[str, str] = {}
+    for i, entry in enumerate(entries):
+        where = f"{key}[{i}]"
+        if not isinstance(entry, Mapping):
+            raise ConfigError("a performer entry must be a mapping", key=where)
+        kind = entry.get("kind")
+        if not isinstance(kind, str) or not kind:
+            raise ConfigError("missing performer kind", key=f"{where}.kind")
+        try:
+            cls = load_performer_kind(kind)
+        except PluginError as exc:
+            raise ConfigError(str(exc), key=f"{where}.kind") from exc
+        for performer in cls.from_config(entry, context, key=where):
+            if performer.node_name in names:
+                raise ConfigError(
+                    f"performer name {performer.node_name!r} already used by "
+                    f"{names[performer.node_name]}",
+                    key=f"{where}.name",
+                )
+            names[performer.node_name] = where
+            performers.append(performer)
+    return performers
