@@ -1,0 +1,590 @@
+"""The py_trees behaviours one plan action is made of, and the run-time state they share.
+
+Each action of a plan becomes (see :mod:`plansys_bridge.execution.tree_builder`)::
+
+    WaitForPredecessors(start) -> WaitAtStartReq -> ApplyAtStartEffect
+      -> ReactiveSequence[CheckTimeout?, CheckOverAllReq, ExecuteAction]
+      -> WaitForPredecessors(end) -> CheckAtEndReq -> ApplyAtEndEffect
+
+Behaviours never poll on a timer of their own: whatever can change their answer
+(a performer's FINISH, a knowledge change, a deadline they registered with
+:meth:`PlanContext.schedule`) wakes the executor, which ticks the tree again.
+Behaviours read the knowledge through snapshots and change it only through
+``ProblemExpert.apply`` (atomic), so the knowledge never holds half an effect.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import heapq
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import py_trees
+from py_trees.common import Status
+
+from plansys_bridge.errors import PlansysBridgeError
+from plansys_bridge.execution.options import ExecutorOptions
+from plansys_bridge.execution.plan_graph import START, PlanGraph, Point, describe_unmet
+from plansys_bridge.execution.results import ActionRecord
+from plansys_bridge.hub.auction import ActionClient, ActionOutcome
+from plansys_bridge.hub.hub import Hub
+from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, Topics
+from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
+from plansys_bridge.knowledge.state import FluentKey, State
+from plansys_bridge.pddl.model import Atom, Condition, Effect, FluentRef, FluentValue
+from plansys_bridge.planning.plan import PlanStep
+
+if TYPE_CHECKING:
+    from plansys_bridge.knowledge.problem_expert import ProblemExpert
+
+__all__ = [
+    "ActionBehaviour",
+    "ActionBranch",
+    "ActionRuntime",
+    "ApplyAtEndEffect",
+    "ApplyAtStartEffect",
+    "CheckAtEndReq",
+    "CheckOverAllReq",
+    "CheckTimeout",
+    "EffectDelta",
+    "ExecuteAction",
+    "PlanContext",
+    "WaitAtStartReq",
+    "WaitForPredecessors",
+]
+
+
+# ---------------------------------------------------------------- run-time state
+
+
+@dataclass
+class EffectDelta:
+    """What applying an effect actually changed, so it can be undone safely."""
+
+    added: tuple[Atom, ...] = ()
+    deleted: tuple[Atom, ...] = ()
+    fluents: tuple[tuple[FluentKey, float | None, float], ...] = ()
+    """(key, old value or None, new value)."""
+
+    @classmethod
+    def of(
+        cls,
+        evaluator: Evaluator,
+        effect: Effect,
+        state: State,
+        bindings: Mapping[str, str],
+        duration: float | None,
+    ) -> EffectDelta:
+        adds, deletes, updates = evaluator.changes(effect, state, bindings, duration)
+        add_set = set(adds)
+        return cls(
+            added=tuple(a for a in add_set if a not in state),
+            deleted=tuple(d for d in set(deletes) - add_set if d in state),
+            fluents=tuple(
+                (k, state.value(*k), v) for k, v in updates.items() if state.value(*k) != v
+            ),
+        )
+
+    @property
+    def empty(self) -> bool:
+        return not (self.added or self.deleted or self.fluents)
+
+    def undo(self, knowledge: ProblemExpert) -> None:
+        """Revert each change that is still in place, in one knowledge transaction."""
+        state = knowledge.state()
+        with knowledge.transaction():
+            for atom in self.added:
+                if atom in state:
+                    knowledge.remove_predicate(atom)
+            for atom in self.deleted:
+                if atom not in state:
+                    knowledge.add_predicate(atom)
+            for (name, args), old, new in self.fluents:
+                if state.value(name, args) != new:
+                    continue
+                if old is None:
+                    knowledge.remove_function(name, args)
+                else:
+                    knowledge.set_function(FluentValue(FluentRef(name, args), old))
+
+
+@dataclass
+class ActionRuntime:
+    """One action's progress: which of its happenings took place, and why it stopped."""
+
+    index: int
+    step: PlanStep
+    ground: GroundAction
+    record: ActionRecord
+    start_reached: bool = False
+    end_reached: bool = False
+    finished: bool = False
+    skipped: bool = False
+    """Never started because the plan stopped (a failure, a cancel)."""
+    reason: str = ""
+    start_delta: EffectDelta | None = None
+    client: ActionClient | None = None
+
+    @property
+    def text(self) -> str:
+        return self.step.text
+
+
+class PlanContext:
+    """Everything the behaviours of one running plan share.
+
+    The executor owns it; behaviours read ``knowledge``/``evaluator`` and report
+    through :meth:`action_started`, :meth:`action_finished` and friends, which keep
+    the records, publish ``ActionExecutionInfo`` and wake the executor.
+    """
+
+    def __init__(
+        self,
+        *,
+        hub: Hub,
+        knowledge: ProblemExpert,
+        evaluator: Evaluator,
+        graph: PlanGraph,
+        options: ExecutorOptions,
+        plan_id: str,
+        plan_index: int,
+        on_info: Callable[[ActionExecutionInfo], None] | None = None,
+    ) -> None:
+        self.hub = hub
+        self.knowledge = knowledge
+        self.evaluator = evaluator
+        self.graph = graph
+        self.options = options
+        self.plan_id = plan_id
+        self.plan_index = plan_index
+        self.on_info = on_info
+        self.actions: list[ActionRuntime] = []
+        for i, (step, ground) in enumerate(zip(graph.steps, graph.ground, strict=True)):
+            record = ActionRecord(
+                text=step.text,
+                plan_index=plan_index,
+                step=i,
+                planned_duration=step.duration,
+                request_id=f"{plan_id}/{plan_index}/{i}",
+            )
+            self.actions.append(ActionRuntime(i, step, ground, record))
+        self.draining = False
+        """Set on the first failure: no further action starts."""
+        self.cancelled = False
+        self.failures: list[str] = []
+        self.progress = False
+        """Set whenever an action moves on; the executor ticks again while it is set."""
+        self.changed = False
+        """Set when a status changed since the last DOT publication."""
+        self.tasks: set[asyncio.Task[Any]] = set()
+        self._deadlines: list[float] = []
+        self._wake: Callable[[], None] = lambda: None
+
+    # ------------------------------------------------------------ time and wake-ups
+
+    def now(self) -> float:
+        """Mission time (the hub's clock)."""
+        return self.hub.clock.now()
+
+    def wake(self) -> None:
+        """Ask for a tick as soon as possible (safe from the loop's thread only)."""
+        self._wake()
+
+    def bind_wake(self, wake: Callable[[], None]) -> None:
+        self._wake = wake
+
+    def schedule(self, deadline: float) -> None:
+        """Ask for a tick at mission time ``deadline``."""
+        heapq.heappush(self._deadlines, deadline)
+
+    def next_deadline(self) -> float | None:
+        """The earliest deadline still in the future (past ones are dropped)."""
+        now = self.now()
+        while self._deadlines and self._deadlines[0] <= now:
+            heapq.heappop(self._deadlines)
+        return self._deadlines[0] if self._deadlines else None
+
+    # ------------------------------------------------------------ knowledge
+
+    def state(self) -> State:
+        return self.knowledge.state()
+
+    def holds(self, rt: ActionRuntime, cond: Condition) -> bool:
+        return self.evaluator.holds(cond, self.state(), rt.ground.bindings, rt.step.duration)
+
+    def unmet(self, rt: ActionRuntime, cond: Condition) -> str:
+        """The conjuncts of ``cond`` that do not hold now, as ground PDDL text."""
+        return describe_unmet(
+            self.evaluator, cond, self.state(), rt.ground.bindings, rt.step.duration
+        )
+
+    def reached(self, index: int, point: Point) -> bool:
+        rt = self.actions[index]
+        return rt.start_reached if point == START else rt.end_reached
+
+    # ------------------------------------------------------------ reporting
+
+    def publish_info(self, rt: ActionRuntime) -> None:
+        rec = rt.record
+        info = ActionExecutionInfo(
+            status=rec.status,
+            start_stamp=rec.start if rec.start is not None else 0.0,
+            status_stamp=self.now(),
+            action_full_name=rt.text,
+            action=rt.step.action,
+            arguments=rt.step.arguments,
+            duration=rt.step.duration,
+            completion=rec.completion,
+            message_status=rec.message,
+        )
+        self.hub.publish(Topics.ACTION_EXECUTION_INFO, info)
+        if self.on_info is not None:
+            self.on_info(info)
+
+    def action_started(self, rt: ActionRuntime) -> None:
+        rt.start_reached = True
+        rt.record.start = self.now()
+        rt.record.status = ActionStatus.EXECUTING
+        self.progress = self.changed = True
+        self.publish_info(rt)
+
+    def action_ended(self, rt: ActionRuntime) -> None:
+        rt.end_reached = True
+        if rt.record.end is None:
+            rt.record.end = self.now()
+        self.progress = self.changed = True
+
+    def action_executed(self, rt: ActionRuntime, outcome: ActionOutcome) -> None:
+        """The performer is done (success or not); the at-end part may still wait."""
+        rec = rt.record
+        rec.end = self.now()
+        rec.performer = outcome.performer
+        rec.completion = outcome.completion
+        rec.message = outcome.status
+        self.progress = True
+
+    def feedback(self, rt: ActionRuntime, completion: float, status: str) -> None:
+        rt.record.completion = completion
+        rt.record.message = status
+        self.publish_info(rt)
+
+    def action_finished(self, rt: ActionRuntime, success: bool) -> None:
+        """The action's branch is over; settle its record (called once)."""
+        if rt.finished:
+            return
+        rt.finished = True
+        rec = rt.record
+        self.progress = self.changed = True
+        if success:
+            rec.status = ActionStatus.SUCCEEDED
+            if rec.start is None:
+                rec.start = self.now()
+            if rec.end is None:
+                rec.end = self.now()
+            self.publish_info(rt)
+            return
+        if rt.skipped:
+            rec.message = rt.reason or rec.message
+            return  # NOT_EXECUTED stays: it never started
+        rec.status = ActionStatus.FAILED
+        rec.message = rt.reason or rec.message or "failed"
+        if rt.start_reached and rec.end is None:
+            rec.end = self.now()
+        self._rollback(rt)
+        self.draining = True
+        self.failures.append(f"{rt.text}: {rec.message}")
+        self.publish_info(rt)
+
+    def action_halted(self, rt: ActionRuntime) -> None:
+        """The branch was stopped from outside (cancel) before it finished."""
+        if rt.finished:
+            return
+        rt.finished = True
+        self.changed = True
+        if rt.start_reached and not rt.end_reached:
+            rt.record.status = ActionStatus.CANCELLED
+            rt.record.message = rt.reason or "cancelled"
+            if rt.record.end is None:
+                rt.record.end = self.now()
+            self._rollback(rt)
+            self.publish_info(rt)
+        else:
+            rt.skipped = True
+            rt.record.message = rt.reason or "not started: cancelled"
+
+    def _rollback(self, rt: ActionRuntime) -> None:
+        if not self.options.rollback_on_halt or rt.end_reached or rt.start_delta is None:
+            return
+        if rt.start_delta.empty:
+            return
+        try:
+            rt.start_delta.undo(self.knowledge)
+        except PlansysBridgeError as exc:
+            rt.record.message += f" (its at-start effects could not be undone: {exc})"
+
+    def track(self, task: asyncio.Task[Any]) -> None:
+        self.tasks.add(task)
+        task.add_done_callback(self.tasks.discard)
+
+
+# ---------------------------------------------------------------- behaviours
+
+
+class ActionBehaviour(py_trees.behaviour.Behaviour):
+    """Base of the standard behaviours: one action's run-time state and the plan's
+    context; errors raised by the knowledge fail the action with their message."""
+
+    label = "Action"
+
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime, name: str | None = None) -> None:
+        super().__init__(name or f"{self.label} {rt.text}:{rt.index}")
+        self.ctx = ctx
+        self.rt = rt
+
+    def update(self) -> Status:
+        try:
+            return self.step()
+        except PlansysBridgeError as exc:
+            self.rt.reason = f"{self.label}: {exc}"
+            return Status.FAILURE
+
+    def step(self) -> Status:  # pragma: no cover - every subclass implements it
+        raise NotImplementedError
+
+    def fail(self, reason: str) -> Status:
+        self.rt.reason = reason
+        return Status.FAILURE
+
+
+class WaitForPredecessors(ActionBehaviour):
+    """Wait until every happening this action's ``point`` depends on took place.
+
+    ``point="start"``: before the action starts (PlanSys2's WAIT_PREV_ACTIONS);
+    ``point="end"``: before its at-end effects (PlanSys2's CHECK_PREV_ACTIONS).
+    Fails when a predecessor stopped without reaching that happening, and (for the
+    start) once the plan is stopping, so nothing new starts after a failure.
+    """
+
+    label = "WaitForPredecessors"
+
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime, point: Point = START) -> None:
+        self.point: Point = point
+        self.waits = ctx.graph.waits(rt.index, point)
+        super().__init__(ctx, rt, f"{self.label}({point}) {rt.text}:{rt.index}")
+        self._next = 0
+
+    def step(self) -> Status:
+        ctx = self.ctx
+        if self.point == START and (ctx.draining or ctx.cancelled):
+            self.rt.skipped = True
+            return self.fail(
+                "not started: the plan stopped after "
+                + (ctx.failures[0] if ctx.failures else "a cancel")
+            )
+        while self._next < len(self.waits):
+            j, point = self.waits[self._next]
+            if not ctx.reached(j, point):
+                other = ctx.actions[j]
+                if other.finished:
+                    if self.point == START:
+                        self.rt.skipped = True
+                    return self.fail(f"predecessor {other.text} stopped before its {point}")
+                return Status.RUNNING
+            self._next += 1
+        return Status.SUCCESS
+
+
+class WaitAtStartReq(ActionBehaviour):
+    """Wait for the at-start requirement; fail after ``timeout`` mission seconds
+    (PlanSys2 #218 waits forever). ``timeout=None`` waits forever."""
+
+    label = "WaitAtStartReq"
+
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime, timeout: float | None = None) -> None:
+        super().__init__(ctx, rt)
+        self.timeout = timeout
+        self.deadline: float | None = None
+
+    def initialise(self) -> None:
+        if self.timeout is not None:
+            self.deadline = self.ctx.now() + self.timeout
+            self.ctx.schedule(self.deadline)
+
+    def step(self) -> Status:
+        ctx = self.ctx
+        if ctx.draining or ctx.cancelled:
+            self.rt.skipped = True
+            return self.fail("not started: the plan is stopping")
+        if ctx.holds(self.rt, self.rt.ground.at_start):
+            return Status.SUCCESS
+        if self.deadline is not None and ctx.now() >= self.deadline:
+            unmet = ctx.unmet(self.rt, self.rt.ground.at_start)
+            return self.fail(f"at start requirement {unmet} did not hold within {self.timeout:g} s")
+        return Status.RUNNING
+
+
+class ApplyAtStartEffect(ActionBehaviour):
+    """Apply the at-start effects (atomically) and mark the action started."""
+
+    label = "ApplyAtStartEffect"
+
+    def step(self) -> Status:
+        ctx, rt = self.ctx, self.rt
+        effect = rt.ground.start_effect
+        rt.start_delta = EffectDelta.of(
+            ctx.evaluator, effect, ctx.state(), rt.ground.bindings, rt.step.duration
+        )
+        if not rt.start_delta.empty:
+            ctx.knowledge.apply(effect, rt.ground.bindings, rt.step.duration)
+        ctx.action_started(rt)
+        return Status.SUCCESS
+
+
+class CheckOverAllReq(ActionBehaviour):
+    """The over-all requirement, re-checked on every tick while the action runs;
+    failing halts the action (its performer gets a CANCEL)."""
+
+    label = "CheckOverAllReq"
+
+    def step(self) -> Status:
+        if self.ctx.holds(self.rt, self.rt.ground.over_all):
+            return Status.SUCCESS
+        unmet = self.ctx.unmet(self.rt, self.rt.ground.over_all)
+        return self.fail(f"over all requirement {unmet} no longer holds")
+
+
+class ExecuteAction(ActionBehaviour):
+    """Hand the action to a performer through the auction and follow it.
+
+    ``initialise`` starts an :class:`ActionClient` task; its completion wakes the
+    executor, so the next tick sees the outcome at once. Halting this behaviour
+    (over-all violation, timeout, cancel) cancels the client, which sends CANCEL to
+    the performer.
+    """
+
+    label = "ExecuteAction"
+
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
+        super().__init__(ctx, rt)
+        self.client: ActionClient | None = None
+        self.task: asyncio.Task[ActionOutcome] | None = None
+
+    def initialise(self) -> None:
+        ctx, rt = self.ctx, self.rt
+        self.client = ActionClient(
+            ctx.hub,
+            rt.step.action,
+            rt.step.arguments,
+            request_id=rt.record.request_id,
+            policy=ctx.options.auction,
+        )
+        rt.client = self.client
+        self.task = asyncio.get_running_loop().create_task(
+            self.client.run(lambda c, s: ctx.feedback(rt, c, s)),
+            name=f"execute {rt.record.request_id}",
+        )
+        ctx.track(self.task)
+        self.task.add_done_callback(lambda _t: ctx.wake())
+
+    def step(self) -> Status:
+        task = self.task
+        if task is None or not task.done():
+            return Status.RUNNING
+        if task.cancelled():
+            return self.fail("execution task cancelled")
+        exc = task.exception()
+        if exc is not None:
+            return self.fail(f"execution failed: {exc!r}")
+        outcome = task.result()
+        self.ctx.action_executed(self.rt, outcome)
+        if outcome.success:
+            return Status.SUCCESS
+        return self.fail(outcome.status or "performer reported failure")
+
+    def terminate(self, new_status: Status) -> None:
+        if new_status == Status.INVALID and self.task is not None and not self.task.done():
+            assert self.client is not None
+            self.client.cancel()
+            self.rt.record.end = self.ctx.now()
+
+
+class CheckTimeout(ActionBehaviour):
+    """Fail when the action runs longer than its planned duration plus
+    ``overrun_percentage`` percent (measured from its start)."""
+
+    label = "CheckTimeout"
+
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime, overrun_percentage: float) -> None:
+        super().__init__(ctx, rt)
+        self.overrun_percentage = overrun_percentage
+        self.deadline: float | None = None
+
+    def initialise(self) -> None:
+        start = self.rt.record.start if self.rt.record.start is not None else self.ctx.now()
+        if self.rt.step.duration > 0:
+            self.deadline = start + self.rt.step.duration * (1.0 + self.overrun_percentage / 100.0)
+            self.ctx.schedule(self.deadline)
+
+    def step(self) -> Status:
+        if self.deadline is not None and self.ctx.now() >= self.deadline:
+            return self.fail(
+                f"overran its planned duration {self.rt.step.duration:g} s "
+                f"by more than {self.overrun_percentage:g} %"
+            )
+        return Status.SUCCESS
+
+
+class CheckAtEndReq(ActionBehaviour):
+    """The at-end requirement must hold when the action ends."""
+
+    label = "CheckAtEndReq"
+
+    def step(self) -> Status:
+        if self.ctx.holds(self.rt, self.rt.ground.at_end):
+            return Status.SUCCESS
+        return self.fail(
+            f"at end requirement {self.ctx.unmet(self.rt, self.rt.ground.at_end)} does not hold"
+        )
+
+
+class ApplyAtEndEffect(ActionBehaviour):
+    """Apply the at-end effects (atomically) and mark the action ended."""
+
+    label = "ApplyAtEndEffect"
+
+    def step(self) -> Status:
+        ctx, rt = self.ctx, self.rt
+        effect = rt.ground.end_effect
+        ctx.knowledge.apply(effect, rt.ground.bindings, rt.step.duration)
+        ctx.action_ended(rt)
+        return Status.SUCCESS
+
+
+class ActionBranch(py_trees.decorators.Decorator):
+    """Wraps one action's subtree: records how it ended and never lets a failure
+    stop the sibling actions (the executor decides what to halt)."""
+
+    def __init__(
+        self, ctx: PlanContext, rt: ActionRuntime, child: py_trees.behaviour.Behaviour
+    ) -> None:
+        super().__init__(name=f"{rt.text}:{rt.index}", child=child)
+        self.ctx = ctx
+        self.rt = rt
+
+    def update(self) -> Status:
+        status = self.decorated.status
+        if status == Status.RUNNING:
+            return Status.RUNNING
+        self.ctx.action_finished(self.rt, status == Status.SUCCESS)
+        return Status.SUCCESS
+
+    def terminate(self, new_status: Status) -> None:
+        if new_status == Status.INVALID:
+            self.ctx.action_halted(self.rt)
+
+
+def behaviours_of(root: py_trees.behaviour.Behaviour) -> Sequence[py_trees.behaviour.Behaviour]:
+    """Every behaviour of a subtree, root first."""
+    return list(root.iterate())

@@ -1,0 +1,341 @@
+"""The executor: run plans as behaviour trees, replan on failure, report everything.
+
+Typical use (a mission runner, the terminal, an experiment)::
+
+    executor = Executor(hub, domain, knowledge, planner, ExecutorOptions(max_replans=3))
+    result = await executor.execute(plan, goal=knowledge.get_goal())
+    print(result.status, result.replans, f"{result.efficiency_percent:.1f} %")
+
+What happens in :meth:`Executor.execute`:
+
+1. The plan's dependency graph is built on the current knowledge
+   (:func:`build_plan_graph`) and checked: a requirement nothing explains rejects
+   the plan (``status="rejected"``, ``message`` names action and requirement).
+2. The graph is compiled into a py_trees tree (:func:`build_tree`) and ticked
+   *when something happens*: an action's performer finishes or fails (its client
+   task completes), the knowledge changes (``ProblemExpert.subscribe``), or a
+   deadline a behaviour registered is due (at-start timeout, duration overrun).
+   The tree is ticked again at once while anything moves, so a successor's
+   ``ExecuteAction`` starts in the same loop turn its predecessor's FINISH is
+   processed; there is no fixed 10 Hz polling.
+3. On a failure (an action fails, an at-start requirement times out, an over-all
+   requirement breaks and halts its action), no further action starts; actions
+   already running and unaffected finish, so their effects are applied whole.
+   An action halted after its at-start effects has those effects undone (see
+   ``ExecutorOptions.rollback_on_halt``). Then the planner is asked for a new plan
+   from the current knowledge (``knowledge.to_problem()`` with the goal) in a
+   worker thread, and execution continues with it, ``max_replans`` times at most.
+
+Several plans may execute at once (each ``execute`` call has its own tree and
+``plan_id``; request ids ``<plan_id>/<plan number>/<step>`` keep their auctions
+apart). ``cancel(plan_id)`` halts one, ``cancel()`` all. Published on the hub:
+``executing_plan`` (each plan as it starts), ``action_execution_info`` (every
+status change and feedback), ``dot_graph`` (the coloured graph after changes).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import dataclasses
+import itertools
+import logging
+import threading
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+import py_trees
+from py_trees.common import Status
+
+from plansys_bridge.errors import ExecutionError, PlansysBridgeError
+from plansys_bridge.execution.behaviours import PlanContext
+from plansys_bridge.execution.dot import plan_graph_to_dot
+from plansys_bridge.execution.options import ExecutorOptions
+from plansys_bridge.execution.plan_graph import PlanGraph, PlanGraphError, build_plan_graph
+from plansys_bridge.execution.results import ExecutionResult
+from plansys_bridge.execution.tree_builder import build_tree
+from plansys_bridge.hub.hub import Hub
+from plansys_bridge.hub.messages import ActionExecutionInfo, DotGraph, ExecutingPlan, Topics
+from plansys_bridge.knowledge.evaluation import Evaluator
+from plansys_bridge.pddl.model import Atom, Condition, Domain
+from plansys_bridge.planning.plan import Plan
+
+if TYPE_CHECKING:
+    from plansys_bridge.knowledge.problem_expert import ProblemExpert
+    from plansys_bridge.planning.planner import Planner
+
+__all__ = ["Executor"]
+
+log = logging.getLogger(__name__)
+
+_plan_ids = itertools.count(1)
+
+
+class _Execution:
+    """Book-keeping of one ``execute`` call (one plan_id)."""
+
+    def __init__(self, plan_id: str) -> None:
+        self.plan_id = plan_id
+        self.cancelled = False
+        self.context: PlanContext | None = None
+
+    def cancel(self) -> None:
+        self.cancelled = True
+        if self.context is not None:
+            self.context.wake()
+
+
+class Executor:
+    """Executes plans on a hub against a live knowledge base (see module docs).
+
+    ``planner`` may be None: a failure then ends the execution (no replanning).
+    """
+
+    def __init__(
+        self,
+        hub: Hub,
+        domain: Domain,
+        knowledge: ProblemExpert,
+        planner: Planner | None = None,
+        options: ExecutorOptions | None = None,
+    ) -> None:
+        self.hub = hub
+        self.domain = domain
+        self.knowledge = knowledge
+        self.planner = planner
+        self.options = options if options is not None else ExecutorOptions()
+        existing = getattr(knowledge, "evaluator", None)
+        self.evaluator: Evaluator = (
+            existing
+            if isinstance(existing, Evaluator) and existing.domain == domain
+            else Evaluator(domain)
+        )
+        self._executions: dict[str, _Execution] = {}
+
+    # ------------------------------------------------------------ public API
+
+    @property
+    def running(self) -> list[str]:
+        """plan_ids of the executions under way."""
+        return list(self._executions)
+
+    def build_graph(self, plan: Plan) -> PlanGraph:
+        """The plan's dependency graph on the current knowledge (not checked)."""
+        return build_plan_graph(plan, self.domain, self.knowledge.state(), evaluator=self.evaluator)
+
+    def cancel(self, plan_id: str | None = None) -> None:
+        """Halt one execution (``plan_id``) or all of them; running actions get a
+        CANCEL, and ``execute`` returns with ``status="cancelled"``."""
+        if plan_id is None:
+            for execution in self._executions.values():
+                execution.cancel()
+            return
+        found = self._executions.get(plan_id)
+        if found is None:
+            running = ", ".join(self._executions) or "none"
+            raise ExecutionError(f"no plan {plan_id!r} is executing (running: {running})")
+        found.cancel()
+
+    async def execute(
+        self,
+        plan: Plan,
+        *,
+        goal: Condition | None = None,
+        plan_id: str | None = None,
+        on_info: Callable[[ActionExecutionInfo], None] | None = None,
+    ) -> ExecutionResult:
+        """Execute ``plan`` until it succeeds, fails beyond the replanning budget, or
+        is cancelled.
+
+        ``goal``: what replanning aims at (default: the knowledge's goal); when given,
+        a plan that ends without achieving it counts as failed. ``on_info`` is called
+        with every ``ActionExecutionInfo`` published.
+        """
+        pid = plan_id if plan_id is not None else f"plan-{next(_plan_ids)}"
+        if pid in self._executions:
+            raise ExecutionError(f"a plan with plan_id {pid!r} is already executing")
+        execution = _Execution(pid)
+        self._executions[pid] = execution
+        clock = self.hub.clock
+        result = ExecutionResult(success=False, status="failed", plan_id=pid, started=clock.now())
+        try:
+            await self._execute(plan, goal, execution, on_info, result)
+        finally:
+            result.finished = clock.now()
+            del self._executions[pid]
+        return result
+
+    # ------------------------------------------------------------ the replanning loop
+
+    async def _execute(
+        self,
+        plan: Plan,
+        goal: Condition | None,
+        execution: _Execution,
+        on_info: Callable[[ActionExecutionInfo], None] | None,
+        result: ExecutionResult,
+    ) -> None:
+        current: Plan | None = plan
+        while current is not None:
+            result.plans.append(current)
+            try:
+                graph = self.build_graph(current)
+                graph.check()
+            except PlanGraphError as exc:
+                result.status, result.message = "rejected", str(exc)
+                return
+            except ExecutionError as exc:
+                result.status, result.message = "rejected", str(exc)
+                return
+            ctx = PlanContext(
+                hub=self.hub,
+                knowledge=self.knowledge,
+                evaluator=self.evaluator,
+                graph=graph,
+                options=self.options,
+                plan_id=execution.plan_id,
+                plan_index=len(result.plans) - 1,
+                on_info=on_info,
+            )
+            execution.context = ctx
+            self.hub.publish(
+                Topics.EXECUTING_PLAN, ExecutingPlan(current.to_msg(), execution.plan_id)
+            )
+            await self._run(ctx, execution, goal)
+            result.actions.extend(rt.record for rt in ctx.actions)
+            if ctx.cancelled:
+                result.status, result.message = "cancelled", "cancelled"
+                return
+            failed = bool(ctx.failures)
+            reason = "; ".join(ctx.failures)
+            if not failed and goal is not None and not self._goal_holds(goal):
+                failed, reason = True, "the plan ended without achieving the goal"
+            if not failed:
+                result.success, result.status, result.message = True, "succeeded", ""
+                return
+            result.message = reason
+            current = await self._replan(goal, result, execution)
+
+    def _goal_holds(self, goal: Condition) -> bool:
+        return self.evaluator.holds(goal, self.knowledge.state())
+
+    async def _replan(
+        self, goal: Condition | None, result: ExecutionResult, execution: _Execution
+    ) -> Plan | None:
+        target = goal if goal is not None else self.knowledge.get_goal()
+        if target is not None and self._goal_holds(target):
+            result.success, result.status = True, "succeeded"
+            result.message += " (the goal holds anyway)"
+            return None
+        if self.planner is None or target is None or result.replans >= self.options.max_replans:
+            why = (
+                "no planner to replan with"
+                if self.planner is None
+                else "no goal to replan for"
+                if target is None
+                else f"replanning budget of {self.options.max_replans} used up"
+            )
+            result.status = "failed"
+            result.message += f" ({why})"
+            return None
+        problem = dataclasses.replace(self.knowledge.to_problem(), goal=target)
+        planner = self.planner
+        try:
+            found = await asyncio.to_thread(planner.solve, self.domain, problem)
+        except PlansysBridgeError as exc:
+            result.status, result.message = (
+                "replan_failed",
+                f"{result.message}; replanning failed: {exc}",
+            )
+            return None
+        if execution.cancelled:
+            result.status, result.message = "cancelled", "cancelled while replanning"
+            return None
+        if found.plan is None or not found.solved:
+            result.status = "replan_failed"
+            result.message += f"; replanning failed: {found.status.value} {found.message}".rstrip()
+            return None
+        result.replans += 1
+        log.info("plan %s: replan %d after %s", execution.plan_id, result.replans, result.message)
+        return found.plan
+
+    # ------------------------------------------------------------ event-driven ticking
+
+    async def _run(self, ctx: PlanContext, execution: _Execution, goal: Condition | None) -> None:
+        loop = asyncio.get_running_loop()
+        root = build_tree(ctx)
+        event = asyncio.Event()
+        loop_thread = threading.get_ident()
+
+        def from_knowledge(_change: object) -> None:
+            if threading.get_ident() == loop_thread:
+                event.set()
+            else:
+                loop.call_soon_threadsafe(event.set)
+
+        ctx.bind_wake(event.set)
+        unsubscribe = self.knowledge.subscribe(from_knowledge)
+        goal_atoms = self._goal_atoms(goal)
+        clock = self.hub.clock
+        try:
+            if self.options.publish_dot:
+                self._publish_dot(ctx, goal_atoms)
+            while True:
+                event.clear()
+                if execution.cancelled and not ctx.cancelled:
+                    ctx.cancelled = True
+                    root.stop(Status.INVALID)
+                    break
+                self._tick(root, ctx)
+                if ctx.changed and self.options.publish_dot:
+                    self._publish_dot(ctx, goal_atoms)
+                if root.status != Status.RUNNING:
+                    break
+                deadline = ctx.next_deadline()
+                handle = None
+                if deadline is not None:
+                    delay = max(0.0, (deadline - clock.now()) * clock.time_scale)
+                    handle = loop.call_later(delay, event.set)
+                try:
+                    await event.wait()
+                finally:
+                    if handle is not None:
+                        handle.cancel()
+        except asyncio.CancelledError:
+            ctx.cancelled = True
+            root.stop(Status.INVALID)
+            for task in list(ctx.tasks):
+                task.cancel()
+            raise
+        finally:
+            unsubscribe()
+            ctx.bind_wake(lambda: None)
+            if self.options.publish_dot and ctx.changed:
+                self._publish_dot(ctx, goal_atoms)
+        # every auction client ends before the plan does (a cancel completes quickly)
+        for rt in ctx.actions:
+            if rt.client is not None:
+                rt.client.cancel()
+        if ctx.tasks:
+            await asyncio.gather(*list(ctx.tasks), return_exceptions=True)
+
+    def _tick(self, root: py_trees.behaviour.Behaviour, ctx: PlanContext) -> None:
+        for _ in range(self.options.max_ticks_per_wake):
+            ctx.progress = False
+            root.tick_once()
+            if root.status != Status.RUNNING or not ctx.progress:
+                return
+
+    def _goal_atoms(self, goal: Condition | None) -> list[Atom]:
+        target = goal if goal is not None else self.knowledge.get_goal()
+        if target is None:
+            return []
+        positive, _negative = self.evaluator.condition_atoms(target, {}, self.knowledge.state())
+        return sorted(positive, key=str)
+
+    def _publish_dot(self, ctx: PlanContext, goal_atoms: list[Atom]) -> None:
+        ctx.changed = False
+        statuses = [rt.record.status for rt in ctx.actions]
+        text = plan_graph_to_dot(
+            ctx.graph, statuses, goal_atoms, name=f"{ctx.plan_id}/{ctx.plan_index}"
+        )
+        self.hub.publish(Topics.DOT_GRAPH, DotGraph(text, ctx.plan_id))

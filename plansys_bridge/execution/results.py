@@ -1,0 +1,90 @@
+"""What an execution returns: per-action records and the overall result.
+
+Typed results rather than exceptions: a failed action, a replan or a cancel are
+expected outcomes a mission runner reports, not programming errors.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from plansys_bridge.hub.messages import ActionStatus
+from plansys_bridge.planning.plan import Plan
+
+__all__ = ["ActionRecord", "ExecutionResult", "efficiency"]
+
+
+@dataclass
+class ActionRecord:
+    """One action of one plan as it was executed.
+
+    ``start``/``end`` are mission-time stamps (``hub.clock.now()``) of the at-start
+    and at-end effects (``end`` is set too when the action failed or was halted
+    after starting). ``plan_index`` says which plan of the result (0: the first,
+    1: after the first replan...) the action belongs to; ``step`` its index there.
+    """
+
+    text: str
+    status: ActionStatus = ActionStatus.NOT_EXECUTED
+    start: float | None = None
+    end: float | None = None
+    performer: str = ""
+    message: str = ""
+    completion: float = 0.0
+    plan_index: int = 0
+    step: int = 0
+    planned_duration: float = 0.0
+    request_id: str = ""
+
+    @property
+    def execution_time(self) -> float:
+        """How long the action ran (0 if it never started)."""
+        if self.start is None or self.end is None:
+            return 0.0
+        return max(0.0, self.end - self.start)
+
+
+@dataclass
+class ExecutionResult:
+    """The outcome of :meth:`Executor.execute`.
+
+    ``status`` is one of ``succeeded``, ``failed``, ``cancelled``, ``rejected`` (the
+    plan graph did not explain a requirement; ``message`` names it) or
+    ``replan_failed`` (the planner found no new plan). ``plans`` lists every plan
+    executed, the first one included, so ``replans == len(plans) - 1``.
+    """
+
+    success: bool
+    status: str
+    actions: list[ActionRecord] = field(default_factory=list)
+    replans: int = 0
+    plans: list[Plan] = field(default_factory=list)
+    started: float = 0.0
+    finished: float = 0.0
+    message: str = ""
+    plan_id: str = ""
+
+    @property
+    def total_time(self) -> float:
+        return max(0.0, self.finished - self.started)
+
+    @property
+    def failures(self) -> int:
+        """Actions that failed (a halted action counts as cancelled, not failed)."""
+        return sum(1 for a in self.actions if a.status == ActionStatus.FAILED)
+
+    def efficiency(self) -> float:
+        """The paper's metric as a fraction: summed action execution time over total
+        time (above 1.0 when actions ran in parallel)."""
+        return efficiency(self.actions, self.total_time)
+
+    @property
+    def efficiency_percent(self) -> float:
+        return 100.0 * self.efficiency()
+
+
+def efficiency(actions: list[ActionRecord], total_time: float) -> float:
+    """Summed execution time of ``actions`` divided by ``total_time`` (0 if no time)."""
+    if total_time <= 0:
+        return 0.0
+    return sum(a.execution_time for a in actions) / total_time

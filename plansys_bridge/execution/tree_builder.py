@@ -1,0 +1,162 @@
+"""Compile a plan graph into one py_trees behaviour tree.
+
+The root is a ``Parallel`` (success on all) with one branch per action; the graph's
+orderings live in each branch's ``WaitForPredecessors`` behaviours, so actions run
+exactly as concurrently as their dependencies allow (no hand-made nesting of
+sequences, which is where PlanSys2 #155/#184/#331 went wrong).
+
+Users may replace an action's subtree with a *template*: a callable that receives
+an :class:`ActionNodes` (a factory of the standard behaviours for that action) and
+returns the subtree. ``nodes.default()`` builds the standard one, so a template can
+wrap or extend it. A template must keep the behaviours that other actions wait on:
+``WaitForPredecessors(start)``, ``ApplyAtStartEffect`` and ``ApplyAtEndEffect``.
+"""
+
+from __future__ import annotations
+
+import py_trees
+from py_trees.common import ParallelPolicy
+
+from plansys_bridge.errors import ExecutionError
+from plansys_bridge.execution.behaviours import (
+    ActionBranch,
+    ActionRuntime,
+    ApplyAtEndEffect,
+    ApplyAtStartEffect,
+    CheckAtEndReq,
+    CheckOverAllReq,
+    CheckTimeout,
+    ExecuteAction,
+    PlanContext,
+    WaitAtStartReq,
+    WaitForPredecessors,
+)
+from plansys_bridge.execution.plan_graph import END, START
+from plansys_bridge.knowledge.evaluation import GroundAction
+
+__all__ = ["ActionNodes", "TemplateError", "build_tree", "default_template"]
+
+
+class TemplateError(ExecutionError):
+    """A user template returned a subtree the executor cannot run safely."""
+
+
+class ActionNodes:
+    """The standard behaviours of one action, for templates to assemble.
+
+    Attributes a template may read: ``action`` (name), ``arguments``, ``text``
+    (``(move r1 a b)``), ``index`` (plan step), ``duration`` (planned),
+    ``ground`` (the ground action: conditions and effects), ``context``.
+    """
+
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
+        self.context = ctx
+        self.runtime = rt
+        self.action = rt.step.action
+        self.arguments = rt.step.arguments
+        self.text = rt.text
+        self.index = rt.index
+        self.duration = rt.step.duration
+        self.ground: GroundAction = rt.ground
+
+    def wait_for_predecessors(self) -> WaitForPredecessors:
+        return WaitForPredecessors(self.context, self.runtime, START)
+
+    def wait_for_end_predecessors(self) -> WaitForPredecessors:
+        return WaitForPredecessors(self.context, self.runtime, END)
+
+    def wait_at_start_req(self, timeout: float | str | None = "default") -> WaitAtStartReq:
+        t = self.context.options.at_start_timeout if timeout == "default" else timeout
+        assert not isinstance(t, str)
+        return WaitAtStartReq(self.context, self.runtime, t)
+
+    def apply_at_start_effect(self) -> ApplyAtStartEffect:
+        return ApplyAtStartEffect(self.context, self.runtime)
+
+    def check_over_all_req(self) -> CheckOverAllReq:
+        return CheckOverAllReq(self.context, self.runtime)
+
+    def execute_action(self) -> ExecuteAction:
+        return ExecuteAction(self.context, self.runtime)
+
+    def check_timeout(self, overrun_percentage: float) -> CheckTimeout:
+        return CheckTimeout(self.context, self.runtime, overrun_percentage)
+
+    def check_at_end_req(self) -> CheckAtEndReq:
+        return CheckAtEndReq(self.context, self.runtime)
+
+    def apply_at_end_effect(self) -> ApplyAtEndEffect:
+        return ApplyAtEndEffect(self.context, self.runtime)
+
+    def running(self, *extra: py_trees.behaviour.Behaviour) -> py_trees.composites.Sequence:
+        """ReactiveSequence[CheckTimeout?, CheckOverAllReq, *extra, ExecuteAction]:
+        every guard is re-checked on each tick while the action runs."""
+        guards: list[py_trees.behaviour.Behaviour] = []
+        pct = self.context.options.overrun_percentage
+        if pct is not None and self.duration > 0:
+            guards.append(self.check_timeout(pct))
+        guards.append(self.check_over_all_req())
+        guards.extend(extra)
+        guards.append(self.execute_action())
+        return py_trees.composites.Sequence(
+            f"Running {self.text}:{self.index}", memory=False, children=guards
+        )
+
+    def default(self) -> py_trees.composites.Sequence:
+        """The standard subtree (see :mod:`plansys_bridge.execution.behaviours`)."""
+        return py_trees.composites.Sequence(
+            f"{self.text}:{self.index}",
+            memory=True,
+            children=[
+                self.wait_for_predecessors(),
+                self.wait_at_start_req(),
+                self.apply_at_start_effect(),
+                self.running(),
+                self.wait_for_end_predecessors(),
+                self.check_at_end_req(),
+                self.apply_at_end_effect(),
+            ],
+        )
+
+
+def default_template(nodes: ActionNodes) -> py_trees.behaviour.Behaviour:
+    """The standard per-action subtree."""
+    return nodes.default()
+
+
+def build_tree(ctx: PlanContext) -> py_trees.composites.Parallel:
+    """One ``Parallel`` (success on all) with a wrapped branch per action."""
+    branches: list[py_trees.behaviour.Behaviour] = []
+    for rt in ctx.actions:
+        nodes = ActionNodes(ctx, rt)
+        template = ctx.options.template_for(rt.step.action)
+        subtree = default_template(nodes) if template is None else template(nodes)
+        if template is not None:
+            _check_template(subtree, rt)
+        branches.append(ActionBranch(ctx, rt, subtree))
+    return py_trees.composites.Parallel(
+        f"plan {ctx.plan_id}/{ctx.plan_index}",
+        policy=ParallelPolicy.SuccessOnAll(synchronise=True),
+        children=branches,
+    )
+
+
+def _check_template(subtree: object, rt: ActionRuntime) -> None:
+    if not isinstance(subtree, py_trees.behaviour.Behaviour):
+        raise TemplateError(
+            f"template for action {rt.step.action!r} returned {type(subtree).__name__}, "
+            "expected a py_trees behaviour"
+        )
+    found = list(subtree.iterate())
+    missing = []
+    if not any(isinstance(b, WaitForPredecessors) and b.point == START for b in found):
+        missing.append("WaitForPredecessors(start)")
+    if not any(isinstance(b, ApplyAtStartEffect) for b in found):
+        missing.append("ApplyAtStartEffect")
+    if not any(isinstance(b, ApplyAtEndEffect) for b in found):
+        missing.append("ApplyAtEndEffect")
+    if missing:
+        raise TemplateError(
+            f"template for action {rt.step.action!r} ({rt.text}) lacks {', '.join(missing)}; "
+            "other actions wait on them"
+        )
