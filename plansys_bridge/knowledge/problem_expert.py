@@ -1,0 +1,688 @@
+"""The live knowledge: instances, facts, fluent values and the goal.
+
+Why it is built this way:
+
+* Every change is validated against the domain (known predicate/function, arity,
+  known objects, types including subtypes) before anything is touched, and every
+  change runs inside one guarded block that restores a snapshot if anything fails,
+  so bad input never leaves the knowledge half-changed.
+* What changed is computed as a diff between the snapshot and the result, so a
+  subscriber gets exactly one :class:`KnowledgeChange` per change (or per
+  transaction) saying precisely what moved, however the change was made.
+* Facts live in a :class:`State` updated copy-on-write, so ``state()`` is free and
+  the executor can keep old snapshots; insertion order is kept for listings.
+* One re-entrant lock: adapters and the executor call in from other threads.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+import threading
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+from plansys_bridge.errors import KnowledgeError
+from plansys_bridge.hub.messages import Knowledge
+from plansys_bridge.knowledge.domain_expert import DomainExpert
+from plansys_bridge.knowledge.evaluation import Evaluator
+from plansys_bridge.knowledge.grounding import format_number
+from plansys_bridge.knowledge.state import FluentKey, State
+from plansys_bridge.pddl.model import (
+    TRUE,
+    And,
+    Atom,
+    BinaryOp,
+    Compare,
+    Condition,
+    Domain,
+    DurationRef,
+    Effect,
+    Equals,
+    Exists,
+    FluentRef,
+    FluentValue,
+    Forall,
+    Imply,
+    Negate,
+    Not,
+    NumExpr,
+    Or,
+    Problem,
+    TypedName,
+)
+
+log = logging.getLogger(__name__)
+
+_NAME = re.compile(r"^[a-z][a-z0-9_\-]*$")
+
+
+@dataclass(frozen=True)
+class KnowledgeChange:
+    """What one change (or one transaction) did to the knowledge."""
+
+    version: int
+    reason: str
+    added_instances: Mapping[str, str] = field(default_factory=dict)
+    removed_instances: Mapping[str, str] = field(default_factory=dict)
+    added_facts: frozenset[Atom] = frozenset()
+    removed_facts: frozenset[Atom] = frozenset()
+    changed_fluents: Mapping[FluentKey, float] = field(default_factory=dict)
+    removed_fluents: frozenset[FluentKey] = frozenset()
+    goal_changed: bool = False
+    goal: Condition | None = None
+
+
+@dataclass
+class _Snapshot:
+    instances: dict[str, str]
+    facts: dict[Atom, None]
+    fluents: dict[FluentKey, float]
+    goal: Condition | None
+    state: State
+
+
+class ProblemExpert:
+    """The knowledge base of one domain (see module docs)."""
+
+    def __init__(self, domain: Domain | DomainExpert) -> None:
+        self.domain_expert = domain if isinstance(domain, DomainExpert) else DomainExpert(domain)
+        self.domain = self.domain_expert.domain
+        self.evaluator: Evaluator = self.domain_expert.evaluator
+        self._types = self.domain_expert.types
+        self._constants = self.domain_expert.constants
+        self._lock = threading.RLock()
+        self._instances: dict[str, str] = {}
+        self._facts: dict[Atom, None] = {}
+        self._fluents: dict[FluentKey, float] = {}
+        self._goal: Condition | None = None
+        self._state = State(objects=self._constants)
+        self._subscribers: list[Callable[[KnowledgeChange], None]] = []
+        self._depth = 0
+        self._reasons: list[str] = []
+        self.version = 0
+
+    # ================================================================ change machinery
+
+    def _snapshot(self) -> _Snapshot:
+        return _Snapshot(
+            dict(self._instances), dict(self._facts), dict(self._fluents), self._goal, self._state
+        )
+
+    def _restore(self, snap: _Snapshot) -> None:
+        self._instances = snap.instances
+        self._facts = snap.facts
+        self._fluents = snap.fluents
+        self._goal = snap.goal
+        self._state = snap.state
+
+    @contextmanager
+    def _change(self, reason: str) -> Iterator[None]:
+        """Run a change all-or-nothing; notify once when the outermost block ends."""
+        with self._lock:
+            if self._depth:
+                self._reasons.append(reason)
+                yield
+                return
+            snap = self._snapshot()
+            self._depth = 1
+            self._reasons = [reason]
+            try:
+                yield
+            except BaseException:
+                self._restore(snap)
+                raise
+            finally:
+                self._depth = 0
+            reasons = self._reasons
+            self._notify(snap, reasons[0] if len(reasons) == 1 else "transaction")
+
+    @contextmanager
+    def transaction(self) -> Iterator[ProblemExpert]:
+        """Several changes as one: all applied or none, one notification."""
+        with self._change("transaction"):
+            yield self
+
+    def _notify(self, snap: _Snapshot, reason: str) -> None:
+        old, new = snap.state, self._state
+        added: set[Atom] = set()
+        removed: set[Atom] = set()
+        if old is not new:
+            for pred in set(old.predicates()) | set(new.predicates()):
+                before, after = old.tuples(pred), new.tuples(pred)
+                if before is after:
+                    continue
+                added.update(Atom(pred, a) for a in after - before)
+                removed.update(Atom(pred, a) for a in before - after)
+        changed_fluents = {k: v for k, v in self._fluents.items() if snap.fluents.get(k) != v}
+        removed_fluents = frozenset(k for k in snap.fluents if k not in self._fluents)
+        added_instances = {k: v for k, v in self._instances.items() if snap.instances.get(k) != v}
+        removed_instances = {k: v for k, v in snap.instances.items() if self._instances.get(k) != v}
+        goal_changed = snap.goal != self._goal
+        if not (
+            added
+            or removed
+            or changed_fluents
+            or removed_fluents
+            or added_instances
+            or removed_instances
+            or goal_changed
+        ):
+            return
+        self.version += 1
+        change = KnowledgeChange(
+            version=self.version,
+            reason=reason,
+            added_instances=added_instances,
+            removed_instances=removed_instances,
+            added_facts=frozenset(added),
+            removed_facts=frozenset(removed),
+            changed_fluents=changed_fluents,
+            removed_fluents=removed_fluents,
+            goal_changed=goal_changed,
+            goal=self._goal,
+        )
+        for callback in list(self._subscribers):
+            try:
+                callback(change)
+            except Exception:  # a broken subscriber must not break the knowledge
+                log.exception("knowledge subscriber %r failed", callback)
+
+    def subscribe(self, callback: Callable[[KnowledgeChange], None]) -> Callable[[], None]:
+        """Call ``callback`` after every change; returns a function that unsubscribes."""
+        with self._lock:
+            self._subscribers.append(callback)
+
+        def unsubscribe() -> None:
+            with self._lock:
+                if callback in self._subscribers:
+                    self._subscribers.remove(callback)
+
+        return unsubscribe
+
+    # ================================================================ validation
+
+    def _object_type(self, name: str) -> str | None:
+        found = self._instances.get(name)
+        return found if found is not None else self._constants.get(name)
+
+    def _check_args(
+        self, what: str, text: str, params: tuple[TypedName, ...], args: tuple[str, ...]
+    ) -> None:
+        if len(args) != len(params):
+            raise KnowledgeError(f"{what} {text}: expects {len(params)} arguments, got {len(args)}")
+        for param, arg in zip(params, args, strict=True):
+            if arg.startswith("?"):
+                raise KnowledgeError(f"{what} {text}: {arg} is a variable, an object is needed")
+            obj_type = self._object_type(arg)
+            if obj_type is None:
+                raise KnowledgeError(f"{what} {text}: unknown object {arg!r}")
+            if not self._types.is_subtype_of_any((obj_type,), param.types):
+                raise KnowledgeError(
+                    f"{what} {text}: {arg} is a {obj_type}, parameter {param.name} "
+                    f"wants {' or '.join(param.types)}"
+                )
+
+    def _check_fact(self, atom: Atom) -> Atom:
+        atom = Atom(atom.predicate.lower(), tuple(a.lower() for a in atom.args))
+        pdef = self.domain_expert.get_predicate(atom.predicate)
+        if pdef is None:
+            raise KnowledgeError(f"predicate {atom}: unknown predicate {atom.predicate!r}")
+        if self.domain_expert.is_derived(atom.predicate):
+            raise KnowledgeError(
+                f"predicate {atom}: {atom.predicate} is derived; it follows from other facts"
+            )
+        self._check_args("predicate", str(atom), pdef.parameters, atom.args)
+        return atom
+
+    def _check_fluent(self, name: str, args: tuple[str, ...]) -> FluentKey:
+        key = (name.lower(), tuple(a.lower() for a in args))
+        text = _fluent_text(key)
+        fdef = self.domain_expert.get_function(key[0])
+        if fdef is None:
+            raise KnowledgeError(f"function {text}: unknown function {key[0]!r}")
+        self._check_args("function", text, fdef.parameters, key[1])
+        return key
+
+    def _check_condition(self, cond: Condition, scope: dict[str, tuple[str, ...]]) -> None:
+        """Known predicates/functions, arity, objects and (for objects) types."""
+        if isinstance(cond, Atom):
+            pdef = self.domain_expert.get_predicate(cond.predicate)
+            if pdef is None:
+                raise KnowledgeError(f"condition {cond}: unknown predicate {cond.predicate!r}")
+            self._check_terms("condition", str(cond), pdef.parameters, cond.args, scope)
+        elif isinstance(cond, (And, Or)):
+            for c in cond.operands:
+                self._check_condition(c, scope)
+        elif isinstance(cond, Not):
+            self._check_condition(cond.operand, scope)
+        elif isinstance(cond, Imply):
+            self._check_condition(cond.antecedent, scope)
+            self._check_condition(cond.consequent, scope)
+        elif isinstance(cond, (Exists, Forall)):
+            inner = dict(scope)
+            for var in cond.variables:
+                for t in var.types:
+                    if not self.domain_expert.is_valid_type(t):
+                        raise KnowledgeError(
+                            f"condition: variable {var.name} has unknown type {t!r}"
+                        )
+                inner[var.name] = var.types
+            self._check_condition(cond.body, inner)
+        elif isinstance(cond, Equals):
+            for term in (cond.left, cond.right):
+                self._check_term_known("condition", f"(= {cond.left} {cond.right})", term, scope)
+        elif isinstance(cond, Compare):
+            self._check_expr(cond.left, scope)
+            self._check_expr(cond.right, scope)
+
+    def _check_expr(self, expr: NumExpr, scope: dict[str, tuple[str, ...]]) -> None:
+        if isinstance(expr, FluentRef):
+            text = _fluent_text((expr.name, expr.args))
+            fdef = self.domain_expert.get_function(expr.name)
+            if fdef is None:
+                raise KnowledgeError(f"condition {text}: unknown function {expr.name!r}")
+            self._check_terms("condition", text, fdef.parameters, expr.args, scope)
+        elif isinstance(expr, BinaryOp):
+            self._check_expr(expr.left, scope)
+            self._check_expr(expr.right, scope)
+        elif isinstance(expr, Negate):
+            self._check_expr(expr.operand, scope)
+        elif isinstance(expr, DurationRef):
+            raise KnowledgeError("condition: ?duration is only meaningful inside an action")
+
+    def _check_term_known(
+        self, what: str, text: str, term: str, scope: dict[str, tuple[str, ...]]
+    ) -> None:
+        if term.startswith("?"):
+            if term not in scope:
+                raise KnowledgeError(f"{what} {text}: variable {term} is not bound")
+        elif self._object_type(term) is None:
+            raise KnowledgeError(f"{what} {text}: unknown object {term!r}")
+
+    def _check_terms(
+        self,
+        what: str,
+        text: str,
+        params: tuple[TypedName, ...],
+        args: tuple[str, ...],
+        scope: dict[str, tuple[str, ...]],
+    ) -> None:
+        if len(args) != len(params):
+            raise KnowledgeError(f"{what} {text}: expects {len(params)} arguments, got {len(args)}")
+        for param, arg in zip(params, args, strict=True):
+            self._check_term_known(what, text, arg, scope)
+            if arg.startswith("?"):
+                continue
+            obj_type = self._object_type(arg)
+            assert obj_type is not None
+            if not self._types.is_subtype_of_any((obj_type,), param.types):
+                raise KnowledgeError(
+                    f"{what} {text}: {arg} is a {obj_type}, parameter {param.name} "
+                    f"wants {' or '.join(param.types)}"
+                )
+
+    # ================================================================ parsing helpers
+
+    def _atom(self, fact: Atom | str) -> Atom:
+        if isinstance(fact, Atom):
+            return fact
+        from plansys_bridge.pddl.parser import parse_atom
+
+        return parse_atom(fact, self.domain, objects=self.get_instances())
+
+    def _fluent_value(self, fv: FluentValue | str) -> FluentValue:
+        if isinstance(fv, FluentValue):
+            return fv
+        from plansys_bridge.pddl.parser import parse_fluent_value
+
+        return parse_fluent_value(fv, self.domain, objects=self.get_instances())
+
+    def _condition(self, cond: Condition | str) -> Condition:
+        if not isinstance(cond, str):
+            return cond
+        if not cond.strip():
+            raise KnowledgeError("empty condition")
+        from plansys_bridge.pddl.parser import parse_condition
+
+        return parse_condition(cond, self.domain, objects=self.get_instances())
+
+    # ================================================================ instances
+
+    def add_instance(self, name: str, type_name: str) -> bool:
+        """Add an object; False when it already exists with that type."""
+        obj, typ = name.strip().lower(), type_name.strip().lower()
+        if not _NAME.match(obj):
+            raise KnowledgeError(f"instance {name!r}: not a valid PDDL name")
+        if not self.domain_expert.is_valid_type(typ):
+            raise KnowledgeError(f"instance {obj}: unknown type {type_name!r}")
+        with self._change("add_instance"):
+            if obj in self._constants:
+                if self._types.is_subtype(self._constants[obj], typ):
+                    return False
+                raise KnowledgeError(
+                    f"instance {obj}: is a constant of type {self._constants[obj]} in the domain"
+                )
+            current = self._instances.get(obj)
+            if current == typ:
+                return False
+            if current is not None:
+                raise KnowledgeError(f"instance {obj}: already exists with type {current}")
+            self._instances[obj] = typ
+            self._state = self._state.with_changes(objects={**self._state.objects, obj: typ})
+            return True
+
+    def remove_instance(self, name: str) -> bool:
+        """Remove an object with every fact and fluent naming it (and a goal naming it)."""
+        obj = name.strip().lower()
+        with self._change("remove_instance"):
+            if obj in self._constants and obj not in self._instances:
+                raise KnowledgeError(f"instance {obj}: is a constant of the domain")
+            if obj not in self._instances:
+                return False
+            del self._instances[obj]
+            gone = [a for a in self._facts if obj in a.args]
+            for atom in gone:
+                del self._facts[atom]
+            keys = [k for k in self._fluents if obj in k[1]]
+            for key in keys:
+                del self._fluents[key]
+            objects = dict(self._state.objects)
+            del objects[obj]
+            self._state = self._state.with_changes(
+                deletes=gone, removed_fluents=keys, objects=objects
+            )
+            if self._goal is not None and obj in _condition_objects(self._goal):
+                self._goal = None
+            return True
+
+    def get_instances(self) -> dict[str, str]:
+        """Every object (name -> type), domain constants first."""
+        with self._lock:
+            return {**self._constants, **self._instances}
+
+    def get_instance(self, name: str) -> str | None:
+        """The type of an object (or constant), None when unknown."""
+        with self._lock:
+            return self._object_type(name.strip().lower())
+
+    def exist_instance(self, name: str) -> bool:
+        return self.get_instance(name) is not None
+
+    # ================================================================ predicates
+
+    def add_predicate(self, fact: Atom | str) -> bool:
+        """Add a ground fact; False when it was already there."""
+        with self._change("add_predicate"):
+            atom = self._check_fact(self._atom(fact))
+            if atom in self._facts:
+                return False
+            self._facts[atom] = None
+            self._state = self._state.with_changes(adds=(atom,))
+            return True
+
+    def remove_predicate(self, fact: Atom | str) -> bool:
+        """Remove a ground fact; False when it was not there."""
+        with self._change("remove_predicate"):
+            atom = self._check_fact(self._atom(fact))
+            if atom not in self._facts:
+                return False
+            del self._facts[atom]
+            self._state = self._state.with_changes(deletes=(atom,))
+            return True
+
+    def exist_predicate(self, fact: Atom | str) -> bool:
+        """True when the fact holds (derived predicates are evaluated)."""
+        atom = self._atom(fact)
+        atom = Atom(atom.predicate.lower(), tuple(a.lower() for a in atom.args))
+        with self._lock:
+            if self.domain_expert.is_derived(atom.predicate):
+                return self.evaluator.holds(atom, self._state)
+            return atom in self._facts
+
+    def get_predicates(self) -> list[Atom]:
+        """Base facts in the order they were added."""
+        with self._lock:
+            return list(self._facts)
+
+    def get_predicate(self, fact: Atom | str) -> Atom | None:
+        atom = self._atom(fact)
+        return atom if self.exist_predicate(atom) else None
+
+    # ================================================================ functions
+
+    def set_function(self, fv: FluentValue | str) -> bool:
+        """Give a fluent a value (added or updated); False when it already had it."""
+        with self._change("set_function"):
+            value = self._fluent_value(fv)
+            key = self._check_fluent(value.fluent.name, value.fluent.args)
+            if self._fluents.get(key) == value.value:
+                return False
+            self._fluents[key] = float(value.value)
+            self._state = self._state.with_changes(fluents={key: value.value})
+            return True
+
+    def get_function(
+        self, name: str, args: tuple[str, ...] | list[str] | None = None
+    ) -> float | None:
+        """A fluent's value: ``get_function("distance", ("wp1", "wp2"))`` or
+        ``get_function("(distance wp1 wp2)")``; None when undefined."""
+        key = self._fluent_key(name, args)
+        with self._lock:
+            return self._fluents.get(key)
+
+    def remove_function(
+        self, name: str | FluentValue, args: tuple[str, ...] | list[str] | None = None
+    ) -> bool:
+        """Forget a fluent's value; False when it had none."""
+        with self._change("remove_function"):
+            if isinstance(name, FluentValue):
+                key = self._fluent_key(name.fluent.name, name.fluent.args)
+            else:
+                key = self._fluent_key(name, args)
+            key = self._check_fluent(*key)
+            if key not in self._fluents:
+                return False
+            del self._fluents[key]
+            self._state = self._state.with_changes(removed_fluents=(key,))
+            return True
+
+    def get_functions(self) -> list[FluentValue]:
+        with self._lock:
+            return [FluentValue(FluentRef(n, a), v) for (n, a), v in self._fluents.items()]
+
+    @staticmethod
+    def _fluent_key(name: str, args: tuple[str, ...] | list[str] | None) -> FluentKey:
+        if args is None:
+            words = name.replace("(", " ").replace(")", " ").split()
+            if words[:1] == ["="]:
+                words = words[1:-1]
+            if not words:
+                raise KnowledgeError(f"function {name!r}: no function name")
+            return words[0].lower(), tuple(w.lower() for w in words[1:])
+        return name.lower(), tuple(a.lower() for a in args)
+
+    # ================================================================ goal
+
+    def set_goal(self, goal: Condition | str) -> bool:
+        """Replace the goal (validated against the domain and the objects)."""
+        with self._change("set_goal"):
+            cond = self._condition(goal)
+            self._check_condition(cond, {})
+            self._goal = cond
+            return True
+
+    def get_goal(self) -> Condition | None:
+        with self._lock:
+            return self._goal
+
+    def clear_goal(self) -> bool:
+        with self._change("clear_goal"):
+            self._goal = None
+            return True
+
+    def is_goal_satisfied(self, goal: Condition | str | None = None) -> bool:
+        """Does ``goal`` (by default the current goal) hold now?"""
+        with self._lock:
+            cond = self._condition(goal) if goal is not None else self._goal
+            if cond is None:
+                raise KnowledgeError("no goal is set")
+            return self.evaluator.holds(cond, self._state)
+
+    # ================================================================ whole problem
+
+    def load_problem(self, text: str, filename: str = "<problem>", replace: bool = False) -> None:
+        """Add a whole PDDL problem (objects, init, goal) - all of it or nothing.
+
+        ``replace`` clears the knowledge first (in the same all-or-nothing step).
+        """
+        from plansys_bridge.pddl.parser import parse_problem
+
+        if not text.strip():
+            raise KnowledgeError(f"{filename}: empty problem")
+        problem = parse_problem(text, self.domain, filename=filename)
+        self.load(problem, replace=replace)
+
+    def load(self, problem: Problem, replace: bool = False) -> None:
+        """Add a parsed problem - all of it or nothing."""
+        where = problem.source or problem.name
+        if problem.domain_name.lower() != self.domain.name.lower():
+            raise KnowledgeError(
+                f"{where}: problem is for domain {problem.domain_name!r}, not {self.domain.name!r}"
+            )
+        with self._change("load_problem"):
+            if replace:
+                self._clear()
+            try:
+                for obj in problem.objects:
+                    self.add_instance(obj.name, obj.types[0])
+                for atom in problem.init:
+                    self.add_predicate(atom)
+                for fv in problem.init_fluents:
+                    self.set_function(fv)
+                if problem.goal != TRUE:
+                    self.set_goal(problem.goal)
+            except KnowledgeError as exc:
+                raise KnowledgeError(f"{where}: {exc}") from exc
+
+    def _clear(self) -> None:
+        self._instances = {}
+        self._facts = {}
+        self._fluents = {}
+        self._goal = None
+        self._state = State(objects=self._constants)
+
+    def clear_knowledge(self) -> bool:
+        """Forget every instance, fact, fluent and the goal."""
+        with self._change("clear_knowledge"):
+            self._clear()
+            return True
+
+    def to_problem(self, name: str = "problem") -> Problem:
+        """The knowledge as a problem model (constants stay in the domain)."""
+        with self._lock:
+            return Problem(
+                name=name,
+                domain_name=self.domain.name,
+                objects=tuple(TypedName(n, (t,)) for n, t in self._instances.items()),
+                init=tuple(self._facts),
+                init_fluents=tuple(
+                    FluentValue(FluentRef(n, a), v) for (n, a), v in self._fluents.items()
+                ),
+                goal=self._goal if self._goal is not None else TRUE,
+            )
+
+    def get_problem_text(self, name: str = "problem") -> str:
+        from plansys_bridge.pddl.writer import write_problem
+
+        return write_problem(self.to_problem(name))
+
+    # ================================================================ evaluation
+
+    def state(self) -> State:
+        """The current snapshot (immutable; cheap to keep)."""
+        with self._lock:
+            return self._state
+
+    def evaluate(self, cond: Condition | str, bindings: Mapping[str, str] | None = None) -> bool:
+        with self._lock:
+            return self.evaluator.holds(self._condition(cond), self._state, bindings)
+
+    def apply(
+        self,
+        effect: Effect,
+        bindings: Mapping[str, str] | None = None,
+        duration: float | None = None,
+    ) -> None:
+        """Apply an effect (PDDL semantics) as one validated, atomic change."""
+        with self._change("apply"):
+            adds, deletes, updates = self.evaluator.changes(effect, self._state, bindings, duration)
+            checked_adds = [self._check_fact(a) for a in adds]
+            checked_deletes = [self._check_fact(a) for a in deletes]
+            for key in updates:
+                self._check_fluent(*key)
+            for atom in checked_deletes:
+                self._facts.pop(atom, None)
+            for atom in checked_adds:
+                self._facts[atom] = None
+            self._fluents.update(updates)
+            self._state = self._state.with_changes(
+                adds=checked_adds, deletes=checked_deletes, fluents=updates
+            )
+
+    # ================================================================ messages
+
+    def to_msg(self) -> Knowledge:
+        """The knowledge as PlanSys2 publishes it."""
+        from plansys_bridge.pddl.writer import write_condition
+
+        with self._lock:
+            return Knowledge(
+                instances=tuple(self.get_instances()),
+                predicates=tuple(str(a) for a in self._facts),
+                functions=tuple(
+                    f"(= {_fluent_text(k)} {format_number(v)})" for k, v in self._fluents.items()
+                ),
+                goal=write_condition(self._goal) if self._goal is not None else "",
+            )
+
+
+def _fluent_text(key: FluentKey) -> str:
+    return "(" + " ".join((key[0], *key[1])) + ")"
+
+
+def _condition_objects(cond: Condition) -> set[str]:
+    """Object names (not variables) a condition mentions."""
+    out: set[str] = set()
+
+    def expr(e: NumExpr) -> None:
+        if isinstance(e, FluentRef):
+            out.update(a for a in e.args if not a.startswith("?"))
+        elif isinstance(e, BinaryOp):
+            expr(e.left)
+            expr(e.right)
+        elif isinstance(e, Negate):
+            expr(e.operand)
+
+    def walk(c: Condition) -> None:
+        if isinstance(c, Atom):
+            out.update(a for a in c.args if not a.startswith("?"))
+        elif isinstance(c, (And, Or)):
+            for o in c.operands:
+                walk(o)
+        elif isinstance(c, Not):
+            walk(c.operand)
+        elif isinstance(c, Imply):
+            walk(c.antecedent)
+            walk(c.consequent)
+        elif isinstance(c, (Exists, Forall)):
+            walk(c.body)
+        elif isinstance(c, Equals):
+            out.update(a for a in (c.left, c.right) if not a.startswith("?"))
+        elif isinstance(c, Compare):
+            expr(c.left)
+            expr(c.right)
+
+    walk(cond)
+    return out

@@ -1,0 +1,187 @@
+"""Immutable snapshots of the world: ground facts, numeric fluents and objects.
+
+Why the layout: the executor checks conditions on every tick and the plan validator
+applies thousands of actions, so a state is indexed by predicate (a lookup is one
+dict access and one set membership test) and a new state shares every unchanged
+predicate's set with its parent (copy-on-write per predicate). ``facts`` as a
+frozenset of :class:`Atom` is built only when someone asks for it. Each state also
+carries a private cache that evaluators use for derived predicates, so they are
+computed once per snapshot.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator, Mapping
+from types import MappingProxyType
+from typing import Any, TypeAlias
+
+from plansys_bridge.pddl.model import Atom
+
+FluentKey: TypeAlias = tuple[str, tuple[str, ...]]
+"""``("battery", ("r2d2",))`` for ``(battery r2d2)``."""
+
+Args: TypeAlias = tuple[str, ...]
+
+_EMPTY: frozenset[Args] = frozenset()
+
+
+class State:
+    """A snapshot of facts, fluent values and objects (name -> type, constants included).
+
+    Treat it as immutable: every change goes through :meth:`with_changes`, which
+    returns a new state. ``fluents`` and ``objects`` are read-only views.
+    """
+
+    __slots__ = ("_cache", "_facts", "_fluents", "_index", "_object_cache", "_objects")
+
+    def __init__(
+        self,
+        facts: Iterable[Atom] = (),
+        fluents: Mapping[FluentKey, float] | None = None,
+        objects: Mapping[str, str] | None = None,
+    ) -> None:
+        grouped: dict[str, set[Args]] = {}
+        for atom in facts:
+            grouped.setdefault(atom.predicate, set()).add(atom.args)
+        self._index: dict[str, frozenset[Args]] = {p: frozenset(a) for p, a in grouped.items()}
+        self._facts: frozenset[Atom] | None = None
+        self._fluents: dict[FluentKey, float] = {k: float(v) for k, v in (fluents or {}).items()}
+        self._objects: dict[str, str] = dict(objects or {})
+        self._cache: dict[Any, Any] = {}
+        self._object_cache: dict[Any, Any] = {}
+
+    @classmethod
+    def _build(
+        cls,
+        index: dict[str, frozenset[Args]],
+        fluents: dict[FluentKey, float],
+        objects: dict[str, str],
+        object_cache: dict[Any, Any],
+    ) -> State:
+        state = cls.__new__(cls)
+        state._index = index
+        state._facts = None
+        state._fluents = fluents
+        state._objects = objects
+        state._cache = {}
+        state._object_cache = object_cache
+        return state
+
+    # ------------------------------------------------------------ reading
+
+    @property
+    def facts(self) -> frozenset[Atom]:
+        """Every ground fact (built lazily, then kept)."""
+        if self._facts is None:
+            self._facts = frozenset(
+                Atom(pred, args) for pred, tuples in self._index.items() for args in tuples
+            )
+        return self._facts
+
+    @property
+    def fluents(self) -> Mapping[FluentKey, float]:
+        return MappingProxyType(self._fluents)
+
+    @property
+    def objects(self) -> Mapping[str, str]:
+        return MappingProxyType(self._objects)
+
+    def tuples(self, predicate: str) -> frozenset[Args]:
+        """Argument tuples of every fact of ``predicate``."""
+        return self._index.get(predicate, _EMPTY)
+
+    def predicates(self) -> Iterator[str]:
+        """Predicates with at least one fact."""
+        return (p for p, t in self._index.items() if t)
+
+    def has(self, predicate: str, args: Args) -> bool:
+        return args in self._index.get(predicate, _EMPTY)
+
+    def __contains__(self, atom: object) -> bool:
+        return isinstance(atom, Atom) and atom.args in self._index.get(atom.predicate, _EMPTY)
+
+    def value(self, name: str, args: Args = ()) -> float | None:
+        """The fluent's value, or None when it is undefined."""
+        return self._fluents.get((name, args))
+
+    def __len__(self) -> int:
+        return sum(len(t) for t in self._index.values())
+
+    def cache(self) -> dict[Any, Any]:
+        """Per-snapshot scratch space for evaluators (derived predicates)."""
+        return self._cache
+
+    def object_cache(self) -> dict[Any, Any]:
+        """Scratch space shared by every state with the same objects (type lookups)."""
+        return self._object_cache
+
+    # ------------------------------------------------------------ changing
+
+    def with_changes(
+        self,
+        adds: Iterable[Atom] = (),
+        deletes: Iterable[Atom] = (),
+        fluents: Mapping[FluentKey, float] | None = None,
+        removed_fluents: Iterable[FluentKey] = (),
+        objects: Mapping[str, str] | None = None,
+    ) -> State:
+        """A new state: ``deletes`` removed, then ``adds`` added (PDDL order), fluents
+        updated/removed, and ``objects`` replacing the object table when given."""
+        index = self._index
+        touched: dict[str, set[Args]] = {}
+        for atom in deletes:
+            current = touched.get(atom.predicate)
+            if current is None:
+                if atom.args not in index.get(atom.predicate, _EMPTY):
+                    continue
+                current = touched[atom.predicate] = set(index[atom.predicate])
+            current.discard(atom.args)
+        for atom in adds:
+            current = touched.get(atom.predicate)
+            if current is None:
+                if atom.args in index.get(atom.predicate, _EMPTY):
+                    continue
+                current = touched[atom.predicate] = set(index.get(atom.predicate, _EMPTY))
+            current.add(atom.args)
+        new_index = index
+        if touched:
+            new_index = dict(index)
+            for pred, tuples in touched.items():
+                if tuples:
+                    new_index[pred] = frozenset(tuples)
+                else:
+                    new_index.pop(pred, None)
+        removed = tuple(removed_fluents)
+        new_fluents = self._fluents
+        if fluents or removed:
+            new_fluents = dict(self._fluents)
+            for key in removed:
+                new_fluents.pop(key, None)
+            if fluents:
+                for key, value in fluents.items():
+                    new_fluents[key] = float(value)
+        if objects is None:
+            new_objects, object_cache = self._objects, self._object_cache
+        else:
+            new_objects, object_cache = dict(objects), {}
+        if new_index is index and new_fluents is self._fluents and objects is None:
+            return self
+        return State._build(new_index, new_fluents, new_objects, object_cache)
+
+    # ------------------------------------------------------------ comparing
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, State):
+            return NotImplemented
+        return (
+            self._index == other._index
+            and self._fluents == other._fluents
+            and self._objects == other._objects
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return (
+            f"State({len(self)} facts, {len(self._fluents)} fluents, {len(self._objects)} objects)"
+        )
