@@ -230,7 +230,7 @@ class MavlinkVehicle:
         while not self._closing.is_set():
             try:
                 msg = conn.recv_msg()
-            except Exception as exc:  # noqa: BLE001 - any socket/serial error ends the link
+            except Exception as exc:
                 self._post(self._on_link_error, f"link error: {exc}")
                 return
             if msg is None:
@@ -395,7 +395,8 @@ class MavlinkVehicle:
         if self._link_error is not None:
             fault.set_result(LinkError(self.url, self._link_error))
         try:
-            await asyncio.wait({task, fault}, return_when=asyncio.FIRST_COMPLETED)
+            waiting: set[asyncio.Future[Any]] = {task, fault}
+            await asyncio.wait(waiting, return_when=asyncio.FIRST_COMPLETED)
             if task.done():
                 return task.result()
             raise fault.result()
@@ -446,6 +447,19 @@ class MavlinkVehicle:
                 pass
             finally:
                 self._waiters.discard(fut)
+
+    async def wait_message(self, timeout: float) -> None:
+        """Return at the next message from the vehicle or after ``timeout``."""
+        if self._link_error is not None:
+            raise LinkError(self.url, self._link_error)
+        fut: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+        self._waiters.add(fut)
+        try:
+            await asyncio.wait_for(fut, timeout)
+        except TimeoutError:
+            pass
+        finally:
+            self._waiters.discard(fut)
 
     # ------------------------------------------------------------ sending
     def _send(self, fn_name: str, *args: Any) -> None:
@@ -592,9 +606,9 @@ class MavlinkVehicle:
     def _arming_texts(self, start: float) -> str:
         seen: list[str] = []
         for entry in self.statustexts:
-            if entry.stamp >= start and entry.text.lower().startswith(ARMING_TEXT_PREFIXES):
-                if entry.text not in seen:
-                    seen.append(entry.text)
+            arming = entry.text.lower().startswith(ARMING_TEXT_PREFIXES)
+            if arming and entry.stamp >= start and entry.text not in seen:
+                seen.append(entry.text)
         return "; ".join(seen[-3:])
 
     async def disarm(self) -> None:
@@ -610,7 +624,7 @@ class MavlinkVehicle:
         self._send(
             "set_position_target_global_int_send", boot_ms, self.target_system,
             self.target_component, ML.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, POSITION_ONLY_MASK,
-            int(round(target.lat * 1e7)), int(round(target.lon * 1e7)), float(target.alt),
+            round(target.lat * 1e7), round(target.lon * 1e7), float(target.alt),
             0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
         )
 

@@ -1,0 +1,563 @@
+"""``MavlinkPerformer``: plan actions performed by one ArduPilot copter or rover.
+
+One performer drives one vehicle and serves several PDDL actions; ``commands`` says
+what each action does on the vehicle, ``actions`` (PlanSys2's specialised
+arguments) which calls it answers, so a fleet of vehicles each bid only for their
+own PDDL object::
+
+    - kind: mavlink
+      name: uav1
+      vehicle: uav1                       # the PDDL object this vehicle is
+      double: {model: copter, speedup: 5} # or  url: tcp:127.0.0.1:5760
+      locations: mavlink_locations.yaml
+      actions: {takeoff: [], fly: [], land: []}
+      commands:
+        takeoff: {do: takeoff, vehicle_arg: 0, altitude: 10}
+        fly:     {do: goto, vehicle_arg: 0, target_arg: 2}
+        land:    {do: land, vehicle_arg: 0}
+
+``do`` is one of ``takeoff``, ``goto``, ``land``, ``rtl``, ``hold``; without a
+``commands`` entry an action named takeoff/land/rtl/hold does that and any other
+action is a ``goto`` to its last argument. Each action runs supervised: a refused
+command, a failsafe, a mode changed by someone else, a STATUSTEXT error or a lost
+heartbeat ends it with FINISH(success=false) and a status naming the link and why.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar
+
+from plansys_bridge.clock import VirtualClock
+from plansys_bridge.errors import ConfigError
+from plansys_bridge.performers.base import (
+    ActionFailed,
+    ActionGoal,
+    ActionPerformer,
+    PerformerContext,
+)
+
+from .double import VehicleDouble
+from .errors import MavlinkError
+from .geo import GeoPoint, distance_3d_m, distance_m
+from .locations import LocationMap, load_locations
+from .modes import Model
+from .telemetry import TelemetryConfig, TelemetryPublisher
+from .vehicle import DEFAULT_TELEMETRY_HZ, LinkSettings, MavlinkVehicle
+
+log = logging.getLogger(__name__)
+
+DOES = ("takeoff", "goto", "land", "rtl", "hold")
+_COMMAND_KEYS = frozenset({"do", "vehicle_arg", "target_arg", "altitude", "seconds"})
+_DOUBLE_KEYS = frozenset({"model", "speedup", "transport", "ekf_delay", "home", "disarm_delay",
+                          "cruise_speed", "battery_failsafe_pct", "battery_capacity_s"})
+_TIMEOUT_KEYS = frozenset({"connect", "heartbeat", "command", "ekf", "arm", "action"})
+
+
+@dataclass(frozen=True)
+class Command:
+    """What one PDDL action does on the vehicle."""
+
+    do: str
+    vehicle_arg: int | None = None
+    target_arg: int = -1
+    altitude: float | None = None
+    seconds: float | None = None
+
+
+@dataclass(frozen=True)
+class Timeouts:
+    """Seconds (wall clock): link, heartbeat loss, COMMAND_ACK, EKF, arming, one action."""
+
+    connect: float = 30.0
+    heartbeat: float = 3.0
+    command: float = 1.0
+    ekf: float = 120.0
+    arm: float = 30.0
+    action: float = 600.0
+
+
+@dataclass(frozen=True)
+class MavlinkSettings:
+    """The kind-specific keys of a mavlink performer entry, checked."""
+
+    vehicle: str
+    url: str | None = None
+    double: Mapping[str, Any] | None = None
+    model: Model | None = None
+    commands: Mapping[str, Command] = field(default_factory=dict)
+    locations: LocationMap | None = None
+    cruise_altitude: float = 10.0
+    arrival_radius: float = 1.0
+    altitude_tolerance: float = 0.5
+    resend_period: float = 1.0
+    feedback_period: float = 0.2
+    timeouts: Timeouts = field(default_factory=Timeouts)
+    telemetry: TelemetryConfig = field(default_factory=TelemetryConfig)
+    telemetry_hz: Mapping[str, float] = field(default_factory=lambda: dict(DEFAULT_TELEMETRY_HZ))
+
+
+class MavlinkPerformer(ActionPerformer):
+    """Performs take-off, go-to, land, RTL and hold on one ArduPilot vehicle."""
+
+    settings_keys: ClassVar[frozenset[str]] = frozenset({
+        "url", "double", "vehicle", "model", "commands", "locations", "cruise_altitude",
+        "arrival_radius", "altitude_tolerance", "resend_period", "feedback_period",
+        "timeouts", "telemetry", "telemetry_hz",
+    })
+
+    def __init__(
+        self,
+        context: PerformerContext,
+        node_name: str,
+        actions: Mapping[str, Sequence[str]],
+        settings: MavlinkSettings,
+        *,
+        heartbeat_period: float = 1.0,
+        commit_timeout: float = 2.0,
+    ) -> None:
+        if isinstance(context.clock, VirtualClock):
+            raise ConfigError("a MAVLink vehicle runs in real time: use a wall clock "
+                              "(clock: {kind: wall}), not the virtual clock", key="clock.kind")
+        if settings.url is None and settings.double is None:
+            raise ConfigError("give the vehicle's url, or double: {model: ...}", key="url")
+        super().__init__(context, node_name, actions, heartbeat_period=heartbeat_period,
+                         commit_timeout=commit_timeout)
+        self.settings = settings
+        self.commands = {a: settings.commands.get(a) or default_command(a) for a in self.actions}
+        self.double: VehicleDouble | None = None
+        self.vehicle: MavlinkVehicle | None = None
+        self.telemetry: TelemetryPublisher | None = None
+        self._last_feedback = -1e9
+
+    # -------------------------------------------------------------- lifecycle
+    async def setup(self) -> None:
+        s = self.settings
+        url = s.url
+        if s.double is not None:
+            opts = dict(s.double)
+            model = opts.pop("model", s.model or "copter")
+            home = opts.pop("home", None)
+            if isinstance(home, Mapping):
+                opts["home"] = GeoPoint(float(home["lat"]), float(home["lon"]),
+                                        float(home.get("alt", 584.0)))
+            self.double = VehicleDouble(model, **opts).start()
+            url = self.double.url
+        assert url is not None
+        t = s.timeouts
+        link = LinkSettings(connect_timeout=t.connect, heartbeat_timeout=t.heartbeat,
+                            command_timeout=t.command, telemetry_hz=s.telemetry_hz)
+        self.vehicle = MavlinkVehicle(url, link)
+        try:
+            await self.vehicle.connect()
+        except MavlinkError:
+            await self.teardown()
+            raise
+        if s.model is not None and self.vehicle.model != s.model:
+            found = self.vehicle.model
+            await self.teardown()
+            raise ConfigError(f"{url}: expected a {s.model}, the vehicle is a {found}",
+                              key="model")
+        if s.telemetry.enabled and self.context.knowledge is not None:
+            self.telemetry = TelemetryPublisher(self.vehicle, self.context.knowledge,
+                                                s.vehicle, s.telemetry)
+            self.telemetry.start()
+
+    async def teardown(self) -> None:
+        if self.telemetry is not None:
+            self.telemetry.stop()
+            self.telemetry = None
+        if self.vehicle is not None:
+            await self.vehicle.close()
+        if self.double is not None:
+            await asyncio.get_running_loop().run_in_executor(None, self.double.stop)
+            self.double = None
+
+    @property
+    def url(self) -> str:
+        return self.vehicle.url if self.vehicle is not None else str(self.settings.url)
+
+    # -------------------------------------------------------------- auction
+    def bid(self, goal: ActionGoal) -> float | None:
+        """Cost for best-bid auctions: metres to the target of a go-to."""
+        cmd = self.commands.get(goal.action)
+        v = self.vehicle
+        if cmd is None or cmd.do != "goto" or v is None or v.telemetry.position is None:
+            return None
+        try:
+            target = self._target(goal, cmd, v.telemetry.home or v.telemetry.position)
+        except ActionFailed:
+            return None
+        return distance_m(v.telemetry.position, target)
+
+    # -------------------------------------------------------------- execution
+    async def execute(self, goal: ActionGoal) -> str | None:
+        cmd = self.commands[goal.action]
+        vehicle = await self._link()
+        vehicle.expected_modes = frozenset()
+        vehicle.expect_armed = False
+        run = getattr(self, f"_do_{cmd.do}")
+        try:
+            return str(await vehicle.supervise(run(vehicle, goal, cmd)))
+        except MavlinkError as exc:
+            raise ActionFailed(str(exc)) from exc
+        finally:
+            vehicle.expected_modes = frozenset()
+            vehicle.expect_armed = False
+
+    async def on_cancel(self, goal: ActionGoal) -> None:
+        """Hold position: copter BRAKE (LOITER if refused), rover HOLD."""
+        v = self.vehicle
+        if v is None or not v.connected:
+            return
+        modes = ("BRAKE", "LOITER") if v.model == "copter" else ("HOLD",)
+        if v.model == "copter" and not v.telemetry.armed:
+            return  # on the ground: nothing moves
+        for mode in modes:
+            try:
+                await v.set_mode(mode)
+                return
+            except MavlinkError as exc:
+                log.warning("%s: cancel could not switch to %s: %s", v.url, mode, exc)
+
+    async def _link(self) -> MavlinkVehicle:
+        v = self.vehicle
+        if v is None:
+            raise ActionFailed(f"{self.url}: performer not started")
+        if not v.connected:
+            await v.close()
+            try:
+                await v.connect()
+            except MavlinkError as exc:
+                raise ActionFailed(f"reconnect failed: {exc}") from exc
+        return v
+
+    def _progress(self, fraction: float, status: str) -> None:
+        loop = asyncio.get_running_loop()
+        now = loop.time()
+        if fraction < 1.0 and now - self._last_feedback < self.settings.feedback_period:
+            return
+        self._last_feedback = now
+        if self.goal is not None:
+            self.feedback(fraction, status)
+
+    def _require_copter(self, v: MavlinkVehicle, what: str) -> None:
+        if v.model != "copter":
+            raise ActionFailed(f"{v.url}: {what} needs a copter, this vehicle is a {v.model}")
+
+    async def _arm_ready(self, v: MavlinkVehicle) -> None:
+        """GUIDED, EKF ready, armed (retrying while arming checks fail)."""
+        t = self.settings.timeouts
+        await v.set_mode("GUIDED")
+        if not v.ekf_ready():
+            self._progress(0.0, "waiting for the EKF to use GPS")
+            await v.wait_ekf(t.ekf)
+        if not v.telemetry.armed:
+            self._progress(0.0, "arming")
+            await v.arm(t.arm)
+        v.expect_armed = True
+
+    async def _do_takeoff(self, v: MavlinkVehicle, goal: ActionGoal, cmd: Command) -> str:
+        self._require_copter(v, "take-off")
+        alt = cmd.altitude if cmd.altitude is not None else self.settings.cruise_altitude
+        pos = await v.wait_position(self.settings.timeouts.connect)
+        if v.telemetry.armed and pos.alt > self.settings.altitude_tolerance:
+            v.expect_armed = True
+            return await self._fly(v, GeoPoint(pos.lat, pos.lon, alt), "take-off altitude")
+        await self._arm_ready(v)
+        await v.takeoff(alt)  # promptly: an idle armed copter disarms after DISARM_DELAY
+        tol = self.settings.altitude_tolerance
+        deadline = asyncio.get_running_loop().time() + self.settings.timeouts.action
+        while True:
+            here = v.telemetry.position or pos
+            self._progress(max(0.0, min(1.0, here.alt / alt)), f"climbing {here.alt:.1f}/{alt:g} m")
+            if here.alt >= alt - tol:
+                return f"airborne at {here.alt:.1f} m"
+            self._check_deadline(v, deadline, "take-off")
+            await v.wait_message(0.2)
+
+    async def _do_goto(self, v: MavlinkVehicle, goal: ActionGoal, cmd: Command) -> str:
+        home = await v.wait_home(self.settings.timeouts.ekf) if self._needs_home() else None
+        pos = await v.wait_position(self.settings.timeouts.connect)
+        target = self._target(goal, cmd, home or pos)
+        name = goal.arguments[cmd.target_arg]
+        if v.model == "copter":
+            if not v.telemetry.armed or pos.alt < self.settings.altitude_tolerance:
+                raise ActionFailed(f"{v.url}: the copter is on the ground; take off before "
+                                   f"flying to {name}")
+            await v.set_mode("GUIDED")
+            v.expect_armed = True
+        else:
+            await self._arm_ready(v)
+        return await self._fly(v, target, name)
+
+    async def _fly(self, v: MavlinkVehicle, target: GeoPoint, name: str) -> str:
+        """Send position targets until within the arrival radius; feedback = leg done."""
+        s = self.settings
+        copter = v.model == "copter"
+        start = v.telemetry.position or target
+        leg = distance_3d_m(start, target) if copter else distance_m(start, target)
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + s.timeouts.action
+        last_send = -1e9
+        while True:
+            now = loop.time()
+            if now - last_send >= s.resend_period:
+                v.send_position_target(target)
+                last_send = now
+            here = v.telemetry.position or start
+            horizontal = distance_m(here, target)
+            remaining = distance_3d_m(here, target) if copter else horizontal
+            done = 1.0 - remaining / leg if leg > 1e-6 else 1.0
+            self._progress(max(0.0, min(1.0, done)), f"{remaining:.1f} m to {name}")
+            if horizontal <= s.arrival_radius and (
+                not copter or abs(here.alt - target.alt) <= s.altitude_tolerance
+            ):
+                return f"reached {name} ({horizontal:.1f} m off)"
+            self._check_deadline(v, deadline, f"going to {name}")
+            await v.wait_message(0.2)
+
+    async def _do_land(self, v: MavlinkVehicle, goal: ActionGoal, cmd: Command) -> str:
+        if v.model != "copter":
+            await v.set_mode("HOLD")
+            if v.telemetry.armed:
+                await v.disarm()
+            return "stopped and disarmed"
+        if not v.telemetry.armed:
+            return "already on the ground, disarmed"
+        await v.set_mode("LAND")
+        return await self._wait_landed(v, "landing")
+
+    async def _wait_landed(self, v: MavlinkVehicle, what: str) -> str:
+        start_alt = max((v.telemetry.position.alt if v.telemetry.position else 0.0), 0.1)
+        deadline = asyncio.get_running_loop().time() + self.settings.timeouts.action
+        while v.telemetry.armed:
+            alt = v.telemetry.position.alt if v.telemetry.position else start_alt
+            self._progress(max(0.0, min(0.99, 1.0 - alt / start_alt)), f"{what}: {alt:.1f} m")
+            self._check_deadline(v, deadline, what)
+            await v.wait_message(0.2)
+        return "landed and disarmed"
+
+    async def _do_rtl(self, v: MavlinkVehicle, goal: ActionGoal, cmd: Command) -> str:
+        if not v.telemetry.armed:
+            return "already disarmed"
+        home = await v.wait_home(self.settings.timeouts.ekf)
+        await v.set_mode("RTL")
+        if v.model == "copter":
+            return await self._wait_landed(v, "returning to launch")
+        start = v.telemetry.position or home
+        leg = max(distance_m(start, home), 1e-6)
+        deadline = asyncio.get_running_loop().time() + self.settings.timeouts.action
+        while True:
+            here = v.telemetry.position or start
+            d = distance_m(here, home)
+            self._progress(max(0.0, min(1.0, 1.0 - d / leg)), f"{d:.1f} m to home")
+            if d <= self.settings.arrival_radius:
+                await v.set_mode("HOLD")
+                return "back at home, holding"
+            self._check_deadline(v, deadline, "return to launch")
+            await v.wait_message(0.2)
+
+    async def _do_hold(self, v: MavlinkVehicle, goal: ActionGoal, cmd: Command) -> str:
+        mode = "LOITER" if v.model == "copter" else "HOLD"
+        if v.model == "copter" and not v.telemetry.armed:
+            return "on the ground"
+        await v.set_mode(mode)
+        if cmd.seconds:
+            await self.clock.sleep(cmd.seconds)
+        return f"holding in {mode}"
+
+    def _check_deadline(self, v: MavlinkVehicle, deadline: float, what: str) -> None:
+        if asyncio.get_running_loop().time() > deadline:
+            raise ActionFailed(f"{v.url}: {what} took longer than "
+                               f"{self.settings.timeouts.action:g} s")
+
+    def _needs_home(self) -> bool:
+        locs = self.settings.locations
+        return locs is None or locs.origin is None
+
+    def _target(self, goal: ActionGoal, cmd: Command, home: GeoPoint) -> GeoPoint:
+        locs = self.settings.locations
+        if locs is None:
+            raise ActionFailed(f"{self.url}: no locations configured for {goal.full_name}")
+        try:
+            name = goal.arguments[cmd.target_arg]
+        except IndexError:
+            raise ActionFailed(f"{goal.full_name} has no argument {cmd.target_arg} "
+                               f"(the target_arg of {goal.action})") from None
+        try:
+            place = locs.get(name)
+        except KeyError as exc:
+            raise ActionFailed(str(exc.args[0])) from None
+        default = self.settings.cruise_altitude if locs.default_alt is None else locs.default_alt
+        point = place.resolve(home, locs.origin, default)
+        if self.vehicle is not None and self.vehicle.model == "rover":
+            point = GeoPoint(point.lat, point.lon, 0.0)
+        return point
+
+    # -------------------------------------------------------------- config
+    @classmethod
+    def from_config(
+        cls, config: Mapping[str, Any], context: PerformerContext, *, key: str = "performer"
+    ) -> list[ActionPerformer]:
+        parsed = cls.parse_config(config, key=key)
+        settings = parse_settings(parsed.settings, parsed.name, context.base_dir, key)
+        actions = specialise(parsed.actions, settings, key)
+        unknown = set(settings.commands) - set(actions)
+        if unknown:
+            raise ConfigError(f"commands for actions not listed in actions: "
+                              f"{', '.join(sorted(unknown))}", key=f"{key}.commands")
+        try:
+            performer = cls(context, parsed.name, actions, settings,
+                            heartbeat_period=parsed.heartbeat_period,
+                            commit_timeout=parsed.commit_timeout)
+        except ConfigError:
+            raise
+        except ValueError as exc:
+            raise ConfigError(str(exc), key=key) from exc
+        return [performer]
+
+
+def default_command(action: str) -> Command:
+    """What an action does when ``commands`` does not say: by name, else a go-to."""
+    name = action.lower()
+    if name in ("takeoff", "take_off", "take-off"):
+        return Command("takeoff")
+    if name in ("land", "rtl", "hold"):
+        return Command(name)
+    if name in ("return_to_launch", "return-to-launch", "return_home"):
+        return Command("rtl")
+    return Command("goto")
+
+
+def specialise(actions: Mapping[str, tuple[str, ...]], settings: MavlinkSettings,
+               key: str) -> dict[str, tuple[str, ...]]:
+    """Put the vehicle's PDDL name at each command's ``vehicle_arg`` position."""
+    out: dict[str, tuple[str, ...]] = {}
+    for action, spec in actions.items():
+        args = list(spec)
+        cmd = settings.commands.get(action)
+        if cmd is not None and cmd.vehicle_arg is not None:
+            i = cmd.vehicle_arg
+            args += [""] * (i + 1 - len(args))
+            if args[i] not in ("", settings.vehicle):
+                raise ConfigError(
+                    f"argument {i} is the vehicle ({settings.vehicle}) but actions.{action} "
+                    f"specialises it to {args[i]!r}", key=f"{key}.commands.{action}.vehicle_arg")
+            args[i] = settings.vehicle
+        out[action] = tuple(args)
+    return out
+
+
+def parse_settings(raw: Mapping[str, Any], name: str, base_dir: Path, key: str) -> MavlinkSettings:
+    """Check the kind-specific keys; every error names its key."""
+    values: dict[str, Any] = {}
+    vehicle = raw.get("vehicle", name)
+    if not isinstance(vehicle, str) or not vehicle.strip():
+        raise ConfigError(f"must be the vehicle's PDDL object name, got {vehicle!r}",
+                          key=f"{key}.vehicle")
+    values["vehicle"] = vehicle.strip().lower()
+    url, double = raw.get("url"), raw.get("double")
+    if (url is None) == (double is None):
+        raise ConfigError("give exactly one of url (tcp:HOST:PORT, udpin:..., serial:...) "
+                          "and double ({model: copter})", key=f"{key}.url")
+    if url is not None:
+        if not isinstance(url, str) or not url.strip():
+            raise ConfigError(f"must be a MAVLink URL like tcp:127.0.0.1:5760, got {url!r}",
+                              key=f"{key}.url")
+        values["url"] = url.strip()
+    if double is not None:
+        values["double"] = _double(double, f"{key}.double")
+    model = raw.get("model")
+    if model is not None:
+        if model not in ("copter", "rover"):
+            raise ConfigError(f"must be copter or rover, got {model!r}", key=f"{key}.model")
+        values["model"] = model
+    commands = raw.get("commands") or {}
+    if not isinstance(commands, Mapping):
+        raise ConfigError("must map action names to {do: ...}", key=f"{key}.commands")
+    values["commands"] = {str(a).lower(): _command(c, f"{key}.commands.{a}")
+                          for a, c in commands.items()}
+    if raw.get("locations") is not None:
+        spec = raw["locations"]
+        if not isinstance(spec, str | Mapping):
+            raise ConfigError("must be a file name or a mapping", key=f"{key}.locations")
+        values["locations"] = load_locations(spec, base_dir, f"{key}.locations")
+    for name_ in ("cruise_altitude", "arrival_radius", "altitude_tolerance", "resend_period",
+                  "feedback_period"):
+        if name_ in raw:
+            values[name_] = _positive(raw[name_], f"{key}.{name_}")
+    timeouts = raw.get("timeouts") or {}
+    if not isinstance(timeouts, Mapping):
+        raise ConfigError("must be a mapping of seconds", key=f"{key}.timeouts")
+    for t in timeouts:
+        if t not in _TIMEOUT_KEYS:
+            raise ConfigError(f"unknown timeout (allowed: {', '.join(sorted(_TIMEOUT_KEYS))})",
+                              key=f"{key}.timeouts.{t}")
+    values["timeouts"] = Timeouts(**{t: _positive(v, f"{key}.timeouts.{t}")
+                                     for t, v in timeouts.items()})
+    values["telemetry"] = TelemetryConfig.from_mapping(raw.get("telemetry"), f"{key}.telemetry")
+    if raw.get("telemetry_hz") is not None:
+        hz = raw["telemetry_hz"]
+        if not isinstance(hz, Mapping):
+            raise ConfigError("must map MAVLink message names to rates in Hz",
+                              key=f"{key}.telemetry_hz")
+        values["telemetry_hz"] = {str(m).upper(): _positive(r, f"{key}.telemetry_hz.{m}")
+                                  for m, r in hz.items()}
+    return MavlinkSettings(**values)
+
+
+def _command(value: object, key: str) -> Command:
+    if isinstance(value, str):
+        value = {"do": value}
+    if not isinstance(value, Mapping):
+        raise ConfigError(f"must be {{do: one of {', '.join(DOES)}, ...}}", key=key)
+    for k in value:
+        if k not in _COMMAND_KEYS:
+            raise ConfigError(f"unknown key (allowed: {', '.join(sorted(_COMMAND_KEYS))})",
+                              key=f"{key}.{k}")
+    do = value.get("do")
+    if do not in DOES:
+        raise ConfigError(f"must be one of {', '.join(DOES)}, got {do!r}", key=f"{key}.do")
+    fields: dict[str, Any] = {"do": do}
+    for k in ("vehicle_arg", "target_arg"):
+        if k in value:
+            v = value[k]
+            if isinstance(v, bool) or not isinstance(v, int) or (k == "vehicle_arg" and v < 0):
+                raise ConfigError(f"must be an argument position (0 = first), got {v!r}",
+                                  key=f"{key}.{k}")
+            fields[k] = v
+    for k in ("altitude", "seconds"):
+        if k in value:
+            fields[k] = _positive(value[k], f"{key}.{k}")
+    return Command(**fields)
+
+
+def _double(value: object, key: str) -> dict[str, Any]:
+    if not isinstance(value, Mapping):
+        raise ConfigError("must be a mapping like {model: copter, speedup: 5}", key=key)
+    for k in value:
+        if k not in _DOUBLE_KEYS:
+            raise ConfigError(f"unknown key (allowed: {', '.join(sorted(_DOUBLE_KEYS))})",
+                              key=f"{key}.{k}")
+    out = dict(value)
+    if out.get("model", "copter") not in ("copter", "rover"):
+        raise ConfigError(f"must be copter or rover, got {out['model']!r}", key=f"{key}.model")
+    for k in ("speedup", "ekf_delay", "disarm_delay", "cruise_speed", "battery_capacity_s"):
+        if k in out:
+            out[k] = _positive(out[k], f"{key}.{k}")
+    if "home" in out:
+        home = out["home"]
+        if not isinstance(home, Mapping) or "lat" not in home or "lon" not in home:
+            raise ConfigError("must be {lat: .., lon: .., alt: ..}", key=f"{key}.home")
+    return out
+
+
+def _positive(value: object, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not value > 0:
+        raise ConfigError(f"must be a number > 0, got {value!r}", key=key)
+    return float(value)

@@ -1,0 +1,52 @@
+; Copters and rovers visiting places: the MAVLink adapter's demo domain.
+; A copter takes off, surveys locations from the air and lands; a rover drives
+; to locations to inspect them.
+; Durations are rough times at the vehicle double's default speeds.
+(define (domain mavlink_drones)
+  (:requirements :strips :typing :durative-actions :numeric-fluents)
+  (:types
+    vehicle location - object
+    copter rover - vehicle)
+  (:predicates
+    (at ?v - vehicle ?l - location)
+    (landed ?c - copter)
+    (airborne ?c - copter)
+    (surveyed ?l - location)
+    (inspected ?l - location)
+    (battery_low ?v - vehicle))
+  (:functions
+    (battery ?v - vehicle))
+
+  (:durative-action takeoff
+    :parameters (?c - copter ?l - location)
+    :duration (= ?duration 5)
+    :condition (and (at start (landed ?c))
+                    (over all (at ?c ?l)))
+    :effect (and (at start (not (landed ?c)))
+                 (at end (airborne ?c))))
+
+  (:durative-action fly
+    :parameters (?c - copter ?from - location ?to - location)
+    :duration (= ?duration 10)
+    :condition (and (at start (at ?c ?from))
+                    (over all (airborne ?c)))
+    :effect (and (at start (not (at ?c ?from)))
+                 (at end (at ?c ?to))
+                 (at end (surveyed ?to))))
+
+  (:durative-action land
+    :parameters (?c - copter ?l - location)
+    :duration (= ?duration 8)
+    :condition (and (at start (airborne ?c))
+                    (over all (at ?c ?l)))
+    :effect (and (at start (not (airborne ?c)))
+                 (at end (landed ?c))))
+
+  (:durative-action drive
+    :parameters (?r - rover ?from - location ?to - location)
+    :duration (= ?duration 15)
+    :condition (and (at start (at ?r ?from)))
+    :effect (and (at start (not (at ?r ?from)))
+                 (at end (at ?r ?to))
+                 (at end (inspected ?to))))
+)
