@@ -231,7 +231,10 @@ class BagNavigationPerformer(ActionPerformer):
                 pending = None
                 await self._wait_until(started, due)
                 self._publish_pose(goal, sample, completion, progress, label)
-                next_publish = due + self.publish_period
+                # next slot on a fixed grid, so a jittery 10 Hz stream keeps its 10 Hz
+                next_publish = (
+                    math.floor(due / self.publish_period + 1e-9) + 1
+                ) * self.publish_period
                 if due >= next_knowledge:
                     self._update_knowledge(goal, sample)
                     next_knowledge = due + self._knowledge_period()

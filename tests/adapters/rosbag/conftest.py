@@ -20,3 +20,8 @@ def shared_bags() -> Path:
 def demo_bags() -> Path:
     """The repository's generated demo bags."""
     return DEMO_BAGS
+
+
+@pytest.fixture(autouse=True)
+def _no_leaks(no_leaks: None) -> None:
+    """Every test here must leave no task, thread or asyncio error behind."""
