@@ -77,8 +77,8 @@ class Plan:
     def from_msg(cls, msg: PlanMsg) -> Plan:
         return cls(tuple(PlanStep.from_item(i) for i in msg.items))
 
-    def to_text(self) -> str:
-        return format_plan(self)
+    def to_text(self, precision: int = 3) -> str:
+        return format_plan(self, precision)
 
 
 _ACTION_RE = re.compile(r"^\(\s*([^\s()]+)((?:\s+[^\s()]+)*)\s*\)$")
@@ -116,7 +116,9 @@ def parse_plan(text: str, filename: str = "<plan>") -> Plan:
     return Plan(tuple(steps))
 
 
-def format_plan(plan: Plan | Iterable[PlanStep]) -> str:
-    """Write PlanSys2's format, one step a line, three decimals."""
+def format_plan(plan: Plan | Iterable[PlanStep], precision: int = 3) -> str:
+    """Write PlanSys2's format, one step a line, three decimals (``precision`` more for
+    solvers that separate happenings by less than a millisecond, such as LPG-td)."""
     steps = plan.steps if isinstance(plan, Plan) else tuple(plan)
-    return "".join(f"{s.time:.3f}: {s.text}  [{s.duration:.3f}]\n" for s in steps)
+    p = precision
+    return "".join(f"{s.time:.{p}f}: {s.text}  [{s.duration:.{p}f}]\n" for s in steps)

@@ -9,6 +9,7 @@ never breaks the others.
 
 from __future__ import annotations
 
+import functools
 import importlib
 from importlib.metadata import entry_points
 
@@ -53,24 +54,22 @@ __all__ = [
 ]
 
 
+@functools.lru_cache(maxsize=1)
+def _registered() -> dict[str, str]:
+    """Entry points of the group, read once (scanning the installed packages is slow)."""
+    return {ep.name: ep.value for ep in entry_points(group=ENTRY_POINT_GROUP)}
+
+
 def solver_names() -> list[str]:
     """Every known solver name: built-in ones in default order, then plugins."""
     names = list(DEFAULT_ORDER)
-    for ep in entry_points(group=ENTRY_POINT_GROUP):
-        if ep.name not in names:
-            names.append(ep.name)
+    names += [name for name in _registered() if name not in names]
     return names
 
 
 def load_solver(name: str) -> type[Solver]:
     """The solver class registered under ``name``; PluginError if unknown or broken."""
-    reference = None
-    for ep in entry_points(group=ENTRY_POINT_GROUP):
-        if ep.name == name:
-            reference = ep.value
-            break
-    if reference is None:
-        reference = BUILTIN_SOLVERS.get(name)
+    reference = _registered().get(name) or BUILTIN_SOLVERS.get(name)
     if reference is None:
         known = ", ".join(solver_names())
         raise PluginError(f"unknown solver {name!r} (known: {known})")

