@@ -12,6 +12,7 @@ from plansys_bridge.errors import KnowledgeError, PddlError, PlansysBridgeError
 from plansys_bridge.knowledge.domain_expert import DomainExpert
 from plansys_bridge.knowledge.problem_expert import KnowledgeChange, ProblemExpert
 from plansys_bridge.pddl.model import (
+    Action,
     AddEffect,
     AndEffect,
     Atom,
@@ -265,7 +266,7 @@ def test_exists_and_numeric_goals(pe_domain) -> None:  # type: ignore[no-untyped
     assert not pe.is_goal_satisfied()
     assert pe.evaluate("(forall (?r - robot) (imply (robot_at ?r bedroom) (= ?r rob1)))")
     action = pe.domain_expert.get_action("action_test")
-    assert action is not None
+    assert isinstance(action, Action)
     assert not pe.evaluate(action.precondition, {"?r": "rob1"})
     pe.set_function("(= (battery_level rob1) 100)")
     assert pe.evaluate(action.precondition, {"r": "rob1"})
