@@ -1,0 +1,222 @@
+"""The plan graph: causal links, threats, parallelism, and rejection of bad plans.
+
+Several cases reproduce PlanSys2 reports where its builder got the structure wrong:
+#211 (two actions that may run together were serialised), required concurrency (an
+action that needs another's at-start effect while it runs), #155/#184/#331 (robots
+that share nothing must not wait for each other).
+"""
+
+from __future__ import annotations
+
+import networkx as nx
+import pytest
+from execution_helpers import knowledge_from, load_domain
+
+from plansys_bridge.errors import ExecutionError
+from plansys_bridge.execution.dot import plan_graph_to_dot
+from plansys_bridge.execution.plan_graph import PlanGraphError, build_plan_graph
+from plansys_bridge.hub.messages import ActionStatus
+from plansys_bridge.pddl.model import Atom
+from plansys_bridge.pddl.parser import parse_domain
+from plansys_bridge.planning.plan import parse_plan
+
+FACTORY_PLAN = """
+0.000: (move robot3 assembly_zone wheels_zone)  [5.000]
+0.000: (move robot2 assembly_zone steering_wheels_zone)  [5.000]
+0.000: (move robot1 assembly_zone body_car_zone)  [5.000]
+5.001: (transport robot3 wheel_3 wheels_zone assembly_zone)  [5.000]
+5.001: (transport robot2 steering_wheel_1 steering_wheels_zone assembly_zone)  [5.000]
+5.001: (transport robot1 body_car_1 body_car_zone assembly_zone)  [5.000]
+10.002: (assemble robot3 assembly_zone wheel_3 body_car_1 steering_wheel_1 car_1)  [5.000]
+10.002: (move robot2 assembly_zone wheels_zone)  [5.000]
+10.002: (move robot1 assembly_zone steering_wheels_zone)  [5.000]
+"""
+
+DOOR_DOMAIN = """
+(define (domain door)
+  (:requirements :typing :durative-actions :fluents)
+  (:types robot door)
+  (:predicates (door_open ?d - door) (passed ?r - robot ?d - door))
+  (:functions (total-cost))
+  (:durative-action hold_open
+    :parameters (?r - robot ?d - door)
+    :duration (= ?duration 10)
+    :condition (and)
+    :effect (and (at start (door_open ?d)) (at end (not (door_open ?d)))
+                 (at end (increase (total-cost) 1))))
+  (:durative-action pass
+    :parameters (?r - robot ?d - door)
+    :duration (= ?duration 3)
+    :condition (and (at start (door_open ?d)) (over all (door_open ?d)))
+    :effect (and (at end (passed ?r ?d)) (at end (increase (total-cost) 1))))
+)
+"""
+
+
+def door_setup():  # type: ignore[no-untyped-def]
+    domain = parse_domain(DOOR_DOMAIN)
+    k = knowledge_from(
+        domain,
+        instances={"holder": "robot", "walker": "robot", "walker2": "robot", "d1": "door"},
+        functions=["(= (total-cost) 0)"],
+    )
+    return domain, k
+
+
+def test_factory_robots_run_in_parallel_and_wait_only_for_what_they_need() -> None:
+    domain = load_domain("factory.pddl")
+    k = knowledge_from(domain, "problem_factory_1.pddl")
+    graph = build_plan_graph(parse_plan(FACTORY_PLAN), domain, k.state())
+    graph.check()
+    assert graph.roots() == [0, 1, 2]
+    # each transport waits for its own robot's move only
+    assert graph.predecessors(3) == [0]
+    assert graph.predecessors(4) == [1]
+    assert graph.predecessors(5) == [2]
+    # assembling car_1 needs the three pieces brought by the three transports
+    assert sorted(graph.predecessors(6)) == [3, 4, 5]
+    assert graph.waits(6, "start") and all(p == "end" for _, p in graph.waits(6, "start"))
+    reasons = graph.graph.edges[4, 6]["reason"]
+    assert "(piece_at steering_wheel_1 assembly_zone)" in reasons
+    assert nx.is_directed_acyclic_graph(graph.graph)
+    schedule = graph.earliest_schedule()
+    assert schedule[:3] == [0.0, 0.0, 0.0]
+    assert schedule[6] == pytest.approx(10.0)
+
+
+def test_actions_needing_only_an_at_start_effect_start_together_issue_211() -> None:
+    domain, k = door_setup()
+    plan = parse_plan("0.000: (hold_open holder d1) [10.000]\n0.001: (pass walker d1) [3.000]\n")
+    graph = build_plan_graph(plan, domain, k.state())
+    graph.check()
+    # pass needs hold_open's *start* effect, not its end (PlanSys2 would wait 10 s)
+    assert graph.waits(1, "start") == ((0, "start"),)
+    # hold_open's end closes the door, so it must wait for pass to end
+    assert graph.waits(0, "end") == ((1, "end"),)
+    assert graph.graph.edges[0, 1]["points"] == {("start", "start")}
+    assert graph.graph.edges[1, 0]["points"] == {("end", "end")}
+
+
+def test_two_independent_passes_do_not_wait_for_each_other() -> None:
+    domain, k = door_setup()
+    plan = parse_plan(
+        "0.000: (hold_open holder d1) [10.000]\n"
+        "0.001: (pass walker d1) [3.000]\n"
+        "0.002: (pass walker2 d1) [3.000]\n"
+    )
+    graph = build_plan_graph(plan, domain, k.state())
+    graph.check()
+    # both only need the door open; the shared (increase (total-cost) 1) commutes
+    assert not graph.graph.has_edge(1, 2) and not graph.graph.has_edge(2, 1)
+    assert graph.waits(1, "start") == graph.waits(2, "start") == ((0, "start"),)
+
+
+def test_plan_breaking_an_over_all_requirement_is_rejected_naming_it() -> None:
+    domain, k = door_setup()
+    # the door closes at 5.0 while pass needs it open until 6.0
+    plan = parse_plan("0.000: (hold_open holder d1) [5.000]\n3.000: (pass walker d1) [3.000]\n")
+    graph = build_plan_graph(plan, domain, k.state())
+    with pytest.raises(PlanGraphError) as info:
+        graph.check()
+    err = info.value
+    assert err.step == 1 and err.action == "(pass walker d1)"
+    assert err.when == "over all" and err.requirement == "(door_open d1)"
+    assert "broken by step 0 (hold_open holder d1)" in str(err)
+
+
+def test_unexplained_at_start_requirement_names_action_and_requirement() -> None:
+    domain = load_domain("simple_example.pddl")
+    k = knowledge_from(
+        domain,
+        instances={"r2d2": "robot", "kitchen": "room", "hall": "room", "garden": "room"},
+        facts=["(robot_at r2d2 kitchen)", "(connected kitchen hall)", "(battery_full r2d2)"],
+    )
+    plan = parse_plan("0: (move r2d2 kitchen hall) [5]\n5.001: (move r2d2 hall garden) [5]\n")
+    graph = build_plan_graph(plan, domain, k.state())
+    with pytest.raises(ExecutionError) as info:
+        graph.check()
+    assert isinstance(info.value, PlanGraphError)
+    text = str(info.value)
+    assert "step 1 (move r2d2 hall garden)" in text
+    assert "at start requirement (connected hall garden)" in text
+    # the move to the hall is explained: robot_at by the knowledge
+    assert all(p.step == 1 for p in info.value.problems)
+
+
+def test_unknown_action_or_arity_names_the_step() -> None:
+    domain = load_domain("simple_example.pddl")
+    k = knowledge_from(domain, instances={"r2d2": "robot", "kitchen": "room"})
+    with pytest.raises(ExecutionError, match=r"plan step 0 \(fly r2d2\).*no action 'fly'"):
+        build_plan_graph(parse_plan("0: (fly r2d2) [1]\n"), domain, k.state())
+    with pytest.raises(ExecutionError, match=r"plan step 0 \(patrol r2d2\)"):
+        build_plan_graph(parse_plan("0: (patrol r2d2) [1]\n"), domain, k.state())
+
+
+def test_a_chain_keeps_only_direct_edges_and_deleters_wait_for_readers() -> None:
+    domain = load_domain("simple_example.pddl")
+    k = knowledge_from(
+        domain,
+        instances={"r2d2": "robot", "a": "room", "b": "room", "c": "room"},
+        facts=["(robot_at r2d2 a)", "(connected a b)", "(connected b c)", "(battery_full r2d2)"],
+    )
+    plan = parse_plan(
+        "0: (patrol r2d2 a) [2]\n2.001: (move r2d2 a b) [5]\n"
+        "7.002: (patrol r2d2 b) [2]\n9.003: (move r2d2 b c) [5]\n"
+    )
+    graph = build_plan_graph(plan, domain, k.state())
+    graph.check()
+    assert sorted(graph.graph.edges) == [(0, 1), (1, 2), (2, 3)]
+    # the move may start only once patrolling a is over (it deletes robot_at a)
+    assert graph.graph.edges[0, 1]["orderings"][0].kind == "threat"
+    assert graph.graph.edges[1, 2]["orderings"][0].kind == "causal"
+    unreduced = build_plan_graph(plan, domain, k.state(), reduce=False)
+    assert len(unreduced.orderings) >= len(graph.orderings)
+
+
+def test_numeric_reads_wait_for_changes_and_changes_for_reads() -> None:
+    domain = load_domain("domain_charging.pddl")
+    k = knowledge_from(
+        domain,
+        instances={"r1": "robot", "wp1": "waypoint", "wp2": "waypoint"},
+        facts=[
+            "(robot_at r1 wp1)",
+            "(connected wp1 wp2)",
+            "(connected wp2 wp1)",
+            "(charger_at wp2)",
+        ],
+        functions=[
+            "(= (speed r1) 1)",
+            "(= (max_range r1) 100)",
+            "(= (state_of_charge r1) 50)",
+            "(= (distance wp1 wp2) 10)",
+            "(= (distance wp2 wp1) 10)",
+        ],
+    )
+    plan = parse_plan(
+        "0: (move r1 wp1 wp2) [10]\n10.001: (charge r1 wp2) [5]\n15.002: (move r1 wp2 wp1) [10]\n"
+    )
+    graph = build_plan_graph(plan, domain, k.state())
+    graph.check()
+    subjects = {o.subject for o in graph.orderings}
+    assert "(state_of_charge r1)" in subjects or "(robot_at r1 wp2)" in subjects
+    assert nx.has_path(graph.graph, 1, 2)
+    assert graph.final_state is not None
+    assert graph.final_state.value("state_of_charge", ("r1",)) == pytest.approx(90.0)
+
+
+def test_ordered_subgoals_and_dot() -> None:
+    domain = load_domain("factory.pddl")
+    k = knowledge_from(domain, "problem_factory_1.pddl")
+    graph = build_plan_graph(parse_plan(FACTORY_PLAN), domain, k.state())
+    goals = [Atom("car_assembled", ("car_1",)), Atom("robot_at", ("robot2", "wheels_zone"))]
+    ordered = graph.ordered_subgoals(goals)
+    assert ordered == [(goals[0], 6), (goals[1], 7)]
+    statuses = [ActionStatus.SUCCEEDED] * 3 + [ActionStatus.EXECUTING]
+    statuses += [ActionStatus.NOT_EXECUTED] * 5
+    dot = plan_graph_to_dot(graph, statuses, goals)
+    assert dot.startswith('digraph "plan"')
+    assert 'a0 [label="0: (move robot3 assembly_zone wheels_zone)' in dot
+    assert "fillcolor=palegreen" in dot and "fillcolor=yellow" in dot
+    assert 'g0 [label="1. (car_assembled car_1)"]' in dot
+    assert "a6 -> g0" in dot
+    assert "a3 -> a6" in dot
