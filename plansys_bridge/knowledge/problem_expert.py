@@ -100,7 +100,6 @@ class ProblemExpert:
         self._state = State(objects=self._constants)
         self._subscribers: list[Callable[[KnowledgeChange], None]] = []
         self._depth = 0
-        self._reasons: list[str] = []
         self.version = 0
 
     # ================================================================ change machinery
@@ -122,12 +121,10 @@ class ProblemExpert:
         """Run a change all-or-nothing; notify once when the outermost block ends."""
         with self._lock:
             if self._depth:
-                self._reasons.append(reason)
                 yield
                 return
             snap = self._snapshot()
             self._depth = 1
-            self._reasons = [reason]
             try:
                 yield
             except BaseException:
@@ -135,8 +132,7 @@ class ProblemExpert:
                 raise
             finally:
                 self._depth = 0
-            reasons = self._reasons
-            self._notify(snap, reasons[0] if len(reasons) == 1 else "transaction")
+            self._notify(snap, reason)
 
     @contextmanager
     def transaction(self) -> Iterator[ProblemExpert]:
@@ -358,20 +354,26 @@ class ProblemExpert:
         if not self.domain_expert.is_valid_type(typ):
             raise KnowledgeError(f"instance {obj}: unknown type {type_name!r}")
         with self._change("add_instance"):
-            if obj in self._constants:
-                if self._types.is_subtype(self._constants[obj], typ):
-                    return False
-                raise KnowledgeError(
-                    f"instance {obj}: is a constant of type {self._constants[obj]} in the domain"
-                )
-            current = self._instances.get(obj)
-            if current == typ:
+            if not self._put_instance(obj, typ):
                 return False
-            if current is not None:
-                raise KnowledgeError(f"instance {obj}: already exists with type {current}")
-            self._instances[obj] = typ
             self._state = self._state.with_changes(objects={**self._state.objects, obj: typ})
             return True
+
+    def _put_instance(self, obj: str, typ: str) -> bool:
+        """Record an instance (state not updated); False when already there."""
+        if obj in self._constants:
+            if self._types.is_subtype(self._constants[obj], typ):
+                return False
+            raise KnowledgeError(
+                f"instance {obj}: is a constant of type {self._constants[obj]} in the domain"
+            )
+        current = self._instances.get(obj)
+        if current == typ:
+            return False
+        if current is not None:
+            raise KnowledgeError(f"instance {obj}: already exists with type {current}")
+        self._instances[obj] = typ
+        return True
 
     def remove_instance(self, name: str) -> bool:
         """Remove an object with every fact and fluent naming it (and a goal naming it)."""
@@ -554,13 +556,26 @@ class ProblemExpert:
         with self._change("load_problem"):
             if replace:
                 self._clear()
+            # One state update for the whole problem: adding facts one by one would
+            # copy each predicate's table once per fact.
             try:
                 for obj in problem.objects:
-                    self.add_instance(obj.name, obj.types[0])
-                for atom in problem.init:
-                    self.add_predicate(atom)
+                    name, typ = obj.name.lower(), obj.types[0].lower()
+                    if not _NAME.match(name):
+                        raise KnowledgeError(f"instance {obj.name!r}: not a valid PDDL name")
+                    if not self.domain_expert.is_valid_type(typ):
+                        raise KnowledgeError(f"instance {name}: unknown type {typ!r}")
+                    self._put_instance(name, typ)
+                facts = [self._check_fact(atom) for atom in problem.init]
+                values: dict[FluentKey, float] = {}
                 for fv in problem.init_fluents:
-                    self.set_function(fv)
+                    values[self._check_fluent(fv.fluent.name, fv.fluent.args)] = float(fv.value)
+                for atom in facts:
+                    self._facts[atom] = None
+                self._fluents.update(values)
+                self._state = self._state.with_changes(
+                    adds=facts, fluents=values, objects={**self._constants, **self._instances}
+                )
                 if problem.goal != TRUE:
                     self.set_goal(problem.goal)
             except KnowledgeError as exc:

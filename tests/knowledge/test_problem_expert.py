@@ -344,7 +344,7 @@ def test_subscribers_get_one_change_per_operation(simple: ProblemExpert) -> None
     assert seen[-1].removed_facts == {Atom("robot_at", ("r2d2", "kitchen"))}
 
     simple.load_problem(read(PROBLEM_EXPERT_PDDL / "problem_simple_1.pddl"))
-    assert seen[-1].reason == "transaction" and len(seen) == 5
+    assert seen[-1].reason == "load_problem" and len(seen) == 5
     assert seen[-1].goal_changed and len(seen[-1].added_instances) == 6
     assert seen[-1].changed_fluents == {("room_distance", ("kitchen", "bedroom")): 10.0}
 
