@@ -166,6 +166,7 @@ class ActionClient:
         self._last_seen = 0.0
         self._loop: asyncio.AbstractEventLoop | None = None
         self._pending_bidders: list[str] = []
+        self._confirm_cb: Callable[[str], None] | None = None
 
     @property
     def full_name(self) -> str:
@@ -176,10 +177,20 @@ class ActionClient:
 
     # ------------------------------------------------------------------ public API
 
-    async def run(self, feedback_cb: FeedbackCallback | None = None) -> ActionOutcome:
-        """Auction the action, follow its performer, and return how it ended."""
+    async def run(
+        self,
+        feedback_cb: FeedbackCallback | None = None,
+        *,
+        confirm_cb: Callable[[str], None] | None = None,
+    ) -> ActionOutcome:
+        """Auction the action, follow its performer, and return how it ended.
+
+        ``confirm_cb(node_name)`` is called each time a performer is confirmed (again
+        after a re-auction): the moment the action really starts executing.
+        """
         if self.phase is not ClientPhase.NEW:
             raise HubError(f"{self!r}: run() may be called only once")
+        self._confirm_cb = confirm_cb
         self._loop = asyncio.get_running_loop()
         subs = [
             self.hub.subscribe(Topics.ACTIONS_HUB, self._on_action_msg),
@@ -303,6 +314,8 @@ class ActionClient:
         self.performer = winner
         self.phase = ClientPhase.EXECUTING
         self._reject_pending()
+        if self._confirm_cb is not None:
+            self._confirm_cb(winner)
         return winner
 
     async def _supervise(

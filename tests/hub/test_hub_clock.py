@@ -108,9 +108,12 @@ def test_threadsafe_wakeup_is_not_starved_by_virtual_timers() -> None:
     async def main() -> tuple[str, float]:
         loop = asyncio.get_running_loop()
         box: asyncio.Future[str] = loop.create_future()
-        thread = threading.Thread(
-            target=lambda: (time.sleep(0.02), loop.call_soon_threadsafe(box.set_result, "hi"))
-        )
+
+        def later() -> None:
+            time.sleep(0.02)
+            loop.call_soon_threadsafe(box.set_result, "hi")
+
+        thread = threading.Thread(target=later)
         thread.start()
         try:
             value = await box  # no timer pending: the loop waits for the real event
