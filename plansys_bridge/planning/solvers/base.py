@@ -14,7 +14,7 @@ from __future__ import annotations
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
 from plansys_bridge.errors import ConfigError, PlansysBridgeError
@@ -35,8 +35,13 @@ class PlanningTask:
 
     @classmethod
     def from_model(cls, domain: Domain, problem: Problem) -> PlanningTask:
+        """The texts solvers get. The problem names the domain it is planned in (as
+        PlanSys2's problem expert writes it), whatever its file said: PlanSys2's own
+        test problems leave ``(:domain )`` empty."""
         from plansys_bridge.pddl.writer import write_domain, write_problem
 
+        if problem.domain_name != domain.name:
+            problem = replace(problem, domain_name=domain.name)
         return cls(domain, problem, write_domain(domain), write_problem(problem))
 
 
