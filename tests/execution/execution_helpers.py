@@ -30,8 +30,6 @@ EXECUTOR_PDDL = Path(
 )
 
 
-
-
 def load_domain(name: str) -> Domain:
     path = EXECUTOR_PDDL / name
     return parse_domain(path.read_text(), str(path))
@@ -105,9 +103,11 @@ def run_scenario(
         hub = Hub(InProcessTransport(), clock)
         await hub.start()
         messages: list[tuple[float, str, object]] = []
-        subs = [
-            hub.subscribe(t, lambda m, t=t: messages.append((clock.now(), t, m))) for t in topics
-        ]
+
+        def recorder(topic: str) -> Callable[[object], None]:
+            return lambda msg: messages.append((clock.now(), topic, msg))
+
+        subs = [hub.subscribe(t, recorder(t)) for t in topics]
         ctx = PerformerContext(hub, clock, knowledge)
         started: dict[str, SimulatedPerformer] = {}
         for spec in performers:
