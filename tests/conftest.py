@@ -23,6 +23,7 @@ import asyncio
 import asyncio.runners
 import gc
 import logging
+import os
 import threading
 import time
 from collections.abc import Iterator
@@ -35,8 +36,12 @@ from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.messages import ActionExecution, Topics
 from plansys_bridge.hub.transport import InProcessTransport
 
-THREAD_GRACE_S = 2.0
-"""How long threads started by a test get to finish after it."""
+pytest_plugins = ["pytester"]
+
+
+def _thread_grace() -> float:
+    """How long threads started by a test get to finish after it (seconds)."""
+    return float(os.environ.get("PLANSYS_BRIDGE_TEST_THREAD_GRACE") or "2.0")
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -65,7 +70,9 @@ def no_leaks(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) ->
 
     def watching_cancel_all(loop: asyncio.AbstractEventLoop) -> None:
         # asyncio.run / Runner.close cancel what is still pending: that is the leak.
-        for task in asyncio.all_tasks(loop):
+        # Only the innermost watcher reports (a test may run pytest inside pytest).
+        innermost = asyncio.runners._cancel_all_tasks is watching_cancel_all  # type: ignore[attr-defined]
+        for task in asyncio.all_tasks(loop) if innermost else ():
             if not task.done():
                 leaked_tasks.append(f"{task.get_name()}: {task.get_coro()!r}")
         original_cancel_all(loop)
@@ -93,7 +100,8 @@ def no_leaks(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) ->
             and not (allowed_prefixes and t.name.startswith(allowed_prefixes))
         ]
 
-    deadline = time.monotonic() + THREAD_GRACE_S
+    grace = _thread_grace()
+    deadline = time.monotonic() + grace
     while new_threads() and time.monotonic() < deadline:
         time.sleep(0.01)
     problems: list[str] = []
@@ -102,7 +110,7 @@ def no_leaks(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) ->
         problems.extend(f"  {t}" for t in leaked_tasks)
     leftover = new_threads()
     if leftover:
-        problems.append(f"threads still running {THREAD_GRACE_S:g} s after the test:")
+        problems.append(f"threads still running {grace:g} s after the test:")
         problems.extend(f"  {t.name} (daemon={t.daemon})" for t in leftover)
     gc.collect()  # surfaces "Task exception was never retrieved"
     asyncio_log.removeHandler(errors)
