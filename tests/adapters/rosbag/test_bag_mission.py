@@ -29,7 +29,12 @@ from plansys_bridge.hub.transport import InProcessTransport
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.mission_config import MissionConfig, load_mission
 from plansys_bridge.monitoring.recorder import MissionRecorder
-from plansys_bridge.monitoring.replay import compare_missions, read_mission, replay_plan
+from plansys_bridge.monitoring.replay import (
+    RecordedMission,
+    compare_missions,
+    read_mission,
+    replay_plan,
+)
 from plansys_bridge.pddl.model import Domain
 from plansys_bridge.pddl.parser import parse_domain_files
 from plansys_bridge.performers.base import ActionPerformer, PerformerContext
@@ -177,6 +182,32 @@ def test_recorded_mission_opens_with_rosbags_and_mcap(recorded: Any) -> None:
     assert "/actions_hub" in topics and not any(t.startswith("rt/") for t in topics)
 
 
+def _rerun(first: RecordedMission, bag: Path, **overrides: Any) -> RecordedMission:
+    """Replay ``first``'s plan with the mission's performers (changed by ``overrides``)."""
+    assert first.plan is not None
+    plan = first.plan
+    mission = load_mission(CONFIG)
+    clock = VirtualClock()
+    hub = Hub(InProcessTransport(), clock)
+
+    async def rerun() -> None:
+        await hub.start()
+        recorder = MissionRecorder(hub, bag).start()
+        performers = _performers(mission, hub, None, recorder, **overrides)
+        try:
+            for p in performers:
+                await p.start()
+            await replay_plan(hub, plan)
+        finally:
+            for p in performers:
+                await p.stop()
+            recorder.close()
+            await hub.close()
+
+    run(rerun(), clock)
+    return read_mission(bag)
+
+
 def test_record_then_replay_gives_the_same_outcome(recorded: Any, tmp_path: Path) -> None:
     bag, _result, plan, _, _ = recorded
     first = read_mission(bag)
@@ -184,59 +215,20 @@ def test_record_then_replay_gives_the_same_outcome(recorded: Any, tmp_path: Path
     assert len(first.actions) == len(plan.steps)
     assert all(a.outcome == "succeeded" and a.performer == "tiago_nav" for a in first.actions)
 
-    mission = load_mission(CONFIG)
-    clock = VirtualClock()
-    hub = Hub(InProcessTransport(), clock)
-
-    async def rerun() -> None:
-        await hub.start()
-        recorder = MissionRecorder(hub, tmp_path / "rerun").start()
-        performers = _performers(mission, hub, None, recorder)
-        try:
-            for p in performers:
-                await p.start()
-            assert first.plan is not None
-            await replay_plan(hub, first.plan)
-        finally:
-            for p in performers:
-                await p.stop()
-            recorder.close()
-            await hub.close()
-
-    run(rerun(), clock)
-    second = read_mission(tmp_path / "rerun")
+    second = _rerun(first, tmp_path / "rerun")
     comparison = compare_missions(first, second, duration_tolerance=0.05)
     assert comparison.same, str(comparison)
 
 
 def test_replay_with_a_changed_performer_is_reported(recorded: Any, tmp_path: Path) -> None:
     first = read_mission(recorded[0])
-    mission = load_mission(CONFIG)
-    clock = VirtualClock()
-    hub = Hub(InProcessTransport(), clock)
-
-    async def rerun() -> None:
-        await hub.start()
-        recorder = MissionRecorder(hub, tmp_path / "rerun").start()
-        performers = _performers(mission, hub, None, recorder, name="other_nav", rate=2.0)
-        try:
-            for p in performers:
-                await p.start()
-            assert first.plan is not None
-            await replay_plan(hub, first.plan)
-        finally:
-            for p in performers:
-                await p.stop()
-            recorder.close()
-            await hub.close()
-
-    run(rerun(), clock)
-    comparison = compare_missions(first, read_mission(tmp_path / "rerun"), duration_tolerance=0.05)
+    second = _rerun(first, tmp_path / "rerun", name="other_nav", rate=2.0)
+    comparison = compare_missions(first, second, duration_tolerance=0.05)
     assert not comparison.same
     text = str(comparison)
     assert "missing in re-run: (move tiago" in text and "by other_nav succeeded" in text
     assert "duration of (move tiago" in text
-    assert compare_missions(first, read_mission(tmp_path / "rerun"), compare_performers=False).same
+    assert compare_missions(first, second, compare_performers=False).same
 
 
 def test_replayed_pose_reaches_the_knowledge(recorded: Any) -> None:
