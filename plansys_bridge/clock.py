@@ -53,10 +53,6 @@ class Clock(Protocol):
         """Wait ``seconds`` of mission time."""
         ...
 
-    def new_loop(self) -> asyncio.AbstractEventLoop:
-        """An event loop this clock can run on."""
-        ...
-
 
 class WallClock:
     """Real time, optionally scaled.
@@ -235,6 +231,7 @@ class VirtualClock:
 
 def run(coro: Coroutine[Any, Any, T], clock: Clock | None = None, *, debug: bool = False) -> T:
     """``asyncio.run`` on the loop ``clock`` needs (a virtual-time loop for VirtualClock)."""
-    factory = clock.new_loop if clock is not None else asyncio.new_event_loop
+    # A clock may say which loop it needs (``new_loop``); the default loop otherwise.
+    factory = getattr(clock, "new_loop", None) or asyncio.new_event_loop
     with asyncio.Runner(debug=debug, loop_factory=factory) as runner:
         return runner.run(coro)
