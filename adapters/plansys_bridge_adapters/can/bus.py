@@ -132,6 +132,11 @@ class CanBusClient:
     def is_open(self) -> bool:
         return self._bus is not None
 
+    @property
+    def bus(self) -> can.BusABC | None:
+        """The python-can bus while open (for diagnostics such as ``bus.state``)."""
+        return self._bus
+
     async def open(self, reader: ReaderKind | None = None) -> None:
         """Open the interface and start reading (``reader`` overrides the config)."""
         if self._bus is not None:
@@ -182,13 +187,14 @@ class CanBusClient:
 
     def send_raw(self, msg: can.Message) -> None:
         if self._bus is None:
-            raise BusSendError(f"CAN bus {self.config.describe()} is not open")
+            raise BusSendError(f"CAN bus error on {self.config.describe()}: not open")
         try:
             self._bus.send(msg, timeout=self.config.send_timeout)
         except can.CanError as exc:
             self.counters.send_errors += 1
             raise BusSendError(
-                f"CAN bus {self.config.describe()}: cannot send {describe_frame(msg)}: {exc}"
+                f"CAN bus error on {self.config.describe()}: cannot send "
+                f"{describe_frame(msg)}: {exc}"
             ) from exc
         self.counters.sent += 1
 

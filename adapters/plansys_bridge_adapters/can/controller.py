@@ -23,7 +23,7 @@ from typing import Literal
 
 from .dbc import normalize_angle
 
-Phase = Literal["turn", "track", "final_yaw", "arrived"]
+Phase = Literal["turn", "track", "final_yaw", "stopping", "arrived"]
 
 
 @dataclass(frozen=True)
@@ -60,6 +60,8 @@ class ControllerConfig:
     """Turn on the spot while the target is more than this far (rad) off the nose."""
     min_linear: float = 0.03
     """Creep speed so the last centimetres are covered despite the slow-down."""
+    min_angular: float = 0.05
+    """Creep turn rate for the last part of a turn."""
     heading_gain: float = 2.0
     limits: MotionLimits = field(default_factory=MotionLimits)
 
@@ -162,6 +164,7 @@ class PathFollower:
         self._angular = 0.0
         self._position_reached = path.length <= self.config.goal_tolerance
         self._initial_yaw_error: float | None = None
+        self._yaw_reached = goal_yaw is None
 
     def reset_command(self, linear: float = 0.0, angular: float = 0.0) -> None:
         """Restart rate limiting from the base's measured twist."""
@@ -189,7 +192,9 @@ class PathFollower:
         if abs(alpha) > cfg.rotate_in_place_angle:
             linear, angular, phase = 0.0, self._turn_rate(alpha), "turn"
         else:
-            stop_speed = math.sqrt(2 * lim.max_linear_accel * max(remaining, 0.0))
+            # Plan to stop half a tolerance short: the ramp-down after arrival covers the rest.
+            stop_at = max(remaining - cfg.goal_tolerance / 2, 0.0)
+            stop_speed = math.sqrt(2 * lim.max_linear_accel * stop_at)
             linear = max(min(lim.max_linear, stop_speed), cfg.min_linear)
             target_distance = max(math.hypot(tx - pose.x, ty - pose.y), 1e-6)
             curvature = 2 * math.sin(alpha) / target_distance
@@ -203,13 +208,15 @@ class PathFollower:
         return ControlOutput(linear, angular, self._scaled(progress), distance, phase)
 
     def _turn_rate(self, error: float) -> float:
-        lim = self.config.limits
+        """Turn rate towards ``error`` that can stop within half a tolerance of it."""
+        cfg, lim = self.config, self.config.limits
+        stop_at = max(abs(error) - cfg.yaw_tolerance / 2, 0.0)
         rate = min(
             lim.max_angular,
-            self.config.heading_gain * abs(error),
-            math.sqrt(2 * lim.max_angular_accel * abs(error)),
+            cfg.heading_gain * abs(error),
+            math.sqrt(2 * lim.max_angular_accel * stop_at),
         )
-        return math.copysign(rate, error)
+        return math.copysign(max(rate, cfg.min_angular), error)
 
     def _rate_limit(self, linear: float, angular: float, dt: float) -> tuple[float, float]:
         lim = self.config.limits
@@ -223,16 +230,20 @@ class PathFollower:
         return max(0.0, min(1.0, path_progress)) * (1.0 - share)
 
     def _final_turn(self, pose: Pose2D, distance: float, dt: float) -> ControlOutput:
-        if self.goal_yaw is None:
-            self._linear = self._angular = 0.0
+        """At the goal: turn to the goal heading (if any), then ramp the command to zero."""
+        share = 0.0
+        target_angular = 0.0
+        if self.goal_yaw is not None and not self._yaw_reached:
+            error = normalize_angle(self.goal_yaw - pose.yaw)
+            if self._initial_yaw_error is None:
+                self._initial_yaw_error = max(abs(error), 1e-9)
+            if abs(error) <= self.config.yaw_tolerance:
+                self._yaw_reached = True
+            else:
+                target_angular = self._turn_rate(error)
+                share = self.YAW_SHARE * min(abs(error) / self._initial_yaw_error, 1.0)
+        linear, angular = self._rate_limit(0.0, target_angular, dt)
+        if linear == 0.0 and angular == 0.0 and target_angular == 0.0:
             return ControlOutput(0.0, 0.0, 1.0, distance, "arrived")
-        error = normalize_angle(self.goal_yaw - pose.yaw)
-        if self._initial_yaw_error is None:
-            self._initial_yaw_error = max(abs(error), 1e-9)
-        if abs(error) <= self.config.yaw_tolerance:
-            self._linear = self._angular = 0.0
-            return ControlOutput(0.0, 0.0, 1.0, distance, "arrived")
-        linear, angular = self._rate_limit(0.0, self._turn_rate(error), dt)
-        turned = 1.0 - min(abs(error) / self._initial_yaw_error, 1.0)
-        progress = (1.0 - self.YAW_SHARE) + self.YAW_SHARE * turned
-        return ControlOutput(linear, angular, min(progress, 0.999), distance, "final_yaw")
+        phase: Phase = "final_yaw" if target_angular else "stopping"
+        return ControlOutput(linear, angular, min(1.0 - share, 0.999), distance, phase)

@@ -149,6 +149,7 @@ class BaseDouble:
         self._faults = FaultBits()
         self._silent_until: float | None = None
         self._heartbeat_frozen = False
+        self._wheels_blocked = False
         self._odom_counter = 0
         self._heartbeat_counter = 0
         self._task: asyncio.Task[None] | None = None
@@ -238,6 +239,10 @@ class BaseDouble:
         self._estop_button = pressed
         if pressed:
             self._target = (0.0, 0.0)
+
+    def block_wheels(self, blocked: bool = True) -> None:
+        """An obstacle or a jammed wheel: the base accepts commands but does not move."""
+        self._wheels_blocked = blocked
 
     def set_battery(self, percent: float) -> None:
         self.battery = max(0.0, min(100.0, percent))
@@ -370,6 +375,9 @@ class BaseDouble:
         else:
             linear_accel, angular_accel = lim.max_linear_accel, lim.max_angular_accel
         x0, y0 = self.model.x, self.model.y
+        if self._wheels_blocked:
+            self.model.linear = self.model.angular = 0.0
+            return
         self.model.step(dt, self._target[0], self._target[1], linear_accel, angular_accel)
         travelled = math.hypot(self.model.x - x0, self.model.y - y0)
         drain = cfg.battery_drain_idle * dt + cfg.battery_drain_per_metre * travelled

@@ -10,6 +10,7 @@ the e-stop, a lost heartbeat or stale odometry.
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -181,6 +182,13 @@ class BaseMonitor:
         if status.state is BaseState.FAULT:
             return Problem("base reports state FAULT")
         if self.pose_time is None or now - self.pose_time > odometry_timeout:
+            heard = max(self.pose_time or -math.inf, self.status_time or -math.inf)
+            if now - heard > odometry_timeout:
+                return Problem(
+                    f"base silent on {self.where}: no odometry and no status for "
+                    f"{now - heard:.2f} s (odometry timeout {odometry_timeout:g} s)",
+                    transient=True,
+                )
             age = "never received" if self.pose_time is None else (
                 f"last {now - self.pose_time:.2f} s ago"
             )

@@ -292,25 +292,26 @@ class CanBasePerformer(ActionPerformer):
             _LOG.warning("%s: could not send zero velocity: %s", self.node_name, exc)
 
     async def _wait_ready(self, mark: Mark) -> None:
-        """Fresh odometry and heartbeat, no fault; a latched watchdog bit may clear."""
+        """Wait for a status newer than the request, then check it and the odometry.
+
+        Zero-velocity commands go out meanwhile: they clear a watchdog bit latched by
+        an earlier stop. Transient problems (no data yet, that watchdog bit) may
+        clear within ``startup_timeout``; a fault bit fails at once.
+        """
         safety = self.settings.safety
         period = 1.0 / safety.command_rate
         start = self.clock.now()
         while True:
-            self._command(0.0, 0.0)  # also clears a watchdog bit latched by an earlier stop
-            try:
-                self._check(mark, ignore_watchdog=self.clock.now() - start < safety.startup_timeout)
-                status = self.monitor.status
-                if (
-                    status is not None
-                    and not status.faults.watchdog
-                    and self.monitor.status_time is not None
-                    and self.monitor.status_time > start
-                ):
+            self._command(0.0, 0.0)
+            timed_out = self.clock.now() - start >= safety.startup_timeout
+            status_time = self.monitor.status_time
+            if (status_time is not None and status_time > start) or timed_out:
+                try:
+                    self._check(mark)
                     return
-            except _BaseFailure as exc:
-                if self.clock.now() - start >= safety.startup_timeout or not exc.transient:
-                    raise
+                except _BaseFailure as exc:
+                    if timed_out or not exc.transient:
+                        raise
             await self.clock.sleep(period)
 
     async def _follow(
