@@ -44,6 +44,16 @@ async def move(rig: Rig, destination: str, feedback: list[tuple[float, str]] | N
     )
 
 
+async def moving(
+    rig: Rig, seconds: float
+) -> tuple[ActionClient, asyncio.Task[ActionOutcome]]:
+    """Start ``(move r2d2 dock kitchen)`` and let it drive for ``seconds``."""
+    client = ActionClient(rig.hub, "move", ["r2d2", "dock", "kitchen"])
+    task = asyncio.get_running_loop().create_task(client.run())
+    await rig.clock.sleep(seconds)
+    return client, task
+
+
 async def settle(rig: Rig, seconds: float = 1.0) -> None:
     await rig.clock.sleep(seconds)
 
@@ -114,9 +124,7 @@ def test_unknown_location_fails_clearly(hub: Hub, channel: str) -> None:
 
 def test_cancel_sends_zero_and_confirms_standstill(hub: Hub, channel: str) -> None:
     async def scenario(rig: Rig) -> None:
-        client = ActionClient(rig.hub, "move", ["r2d2", "dock", "kitchen"])
-        task = asyncio.get_running_loop().create_task(client.run())
-        await rig.clock.sleep(2.0)
+        client, task = await moving(rig, 2.0)
         assert rig.double.model.moving
         client.cancel()
         outcome = await task
@@ -133,9 +141,7 @@ def test_cancel_sends_zero_and_confirms_standstill(hub: Hub, channel: str) -> No
 
 def test_cancel_engages_estop_when_the_base_does_not_stop(hub: Hub, channel: str) -> None:
     async def scenario(rig: Rig) -> None:
-        client = ActionClient(rig.hub, "move", ["r2d2", "dock", "kitchen"])
-        task = asyncio.get_running_loop().create_task(client.run())
-        await rig.clock.sleep(2.0)
+        client, task = await moving(rig, 2.0)
         rig.double.silence()  # no twist can confirm the stop
         client.cancel()
         await task
@@ -173,9 +179,7 @@ def test_every_fault_ends_the_action_and_stops_the_base(
     inject, expected = FAULTS[fault]
 
     async def scenario(rig: Rig) -> None:
-        client = ActionClient(rig.hub, "move", ["r2d2", "dock", "kitchen"])
-        task = asyncio.get_running_loop().create_task(client.run())
-        await rig.clock.sleep(1.5)
+        _client, task = await moving(rig, 1.5)
         assert rig.double.model.moving
         inject(rig)
         failed_at = rig.clock.now()
