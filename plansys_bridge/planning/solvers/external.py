@@ -156,7 +156,7 @@ class ExternalSolver(Solver):
 class _PopfLike(ExternalSolver):
     """POPF and OPTIC print the plan after ";;;; Solution Found" on stdout."""
 
-    capabilities: ClassVar[frozenset[Capability]] = _TEMPORAL
+    capabilities: ClassVar[frozenset[Capability]] = _TEMPORAL | {Capability.REQUIRED_CONCURRENCY}
 
     def read_outcome(self, proc: ProcessResult, folder: Path) -> SolverOutcome:
         marker = proc.stdout.rfind("Solution Found")
@@ -282,6 +282,12 @@ class LpgSolver(ExternalSolver):
         text = proc.stdout.lower()
         if "goals of the planning problem can not be reached" in text or "unsolvable" in text:
             return SolverOutcome(PlanStatus.UNSOLVABLE, message=proc.describe(max_lines=3))
+        if proc.returncode == 0 and "search limit exceeded" in text:
+            return SolverOutcome(
+                PlanStatus.UNSOLVABLE,
+                message="LPG-td gave up (search limit exceeded); it is incomplete, so a plan "
+                "may still exist",
+            )
         return SolverOutcome(PlanStatus.ERROR, message=f"no plan: {proc.describe()}")
 
 
@@ -319,7 +325,8 @@ class FastDownwardSolver(ExternalSolver):
     def read_outcome(self, proc: ProcessResult, folder: Path) -> SolverOutcome:
         plans = sorted(folder.glob("sas_plan*"))
         if plans and proc.returncode in (0, None):
-            return SolverOutcome(PlanStatus.SOLVED, _sequential_plan(plans[-1]), "")
+            plan = _sequential_plan(plans[-1].read_text(), "fast-downward plan")
+            return SolverOutcome(PlanStatus.SOLVED, plan, "")
         if proc.timed_out or proc.returncode in self._TIMEOUT:
             return self.timeout_outcome(proc)
         if proc.returncode in self._UNSOLVABLE:
@@ -329,17 +336,17 @@ class FastDownwardSolver(ExternalSolver):
         return SolverOutcome(PlanStatus.ERROR, message=f"no plan: {proc.describe()}")
 
 
-def _sequential_plan(path: Path) -> Plan:
+def _sequential_plan(text: str, source: str) -> Plan:
     """``(go r a b)`` lines numbered 0, 1, 2, ... as instantaneous steps."""
     steps: list[PlanStep] = []
-    for lineno, raw in enumerate(path.read_text().splitlines(), start=1):
+    for lineno, raw in enumerate(text.splitlines(), start=1):
         line = raw.strip()
         if not line or line.startswith(";"):
             continue
         try:
-            step = parse_plan(f"0: {line}", f"{path.name}:{lineno}").steps[0]
+            step = parse_plan(f"0: {line}", f"{source}:{lineno}").steps[0]
         except PlanFormatError as exc:
-            raise PlanFormatError(f"unreadable plan from fast-downward: {exc}") from exc
+            raise PlanFormatError(f"unreadable plan from {source}: {exc}") from exc
         steps.append(PlanStep(float(len(steps)), step.action, step.arguments, 0.0))
     return Plan(tuple(steps))
 
@@ -392,9 +399,12 @@ class KairosCliSolver(ExternalSolver):
     def read_outcome(self, proc: ProcessResult, folder: Path) -> SolverOutcome:
         plan_file = folder / "plan"
         if proc.returncode == 0 and plan_file.is_file():
-            return SolverOutcome(
-                PlanStatus.SOLVED, plan_from_lines(plan_file.read_text(), "kairos plan")
-            )
+            # IPC format: timed lines for temporal plans, bare actions for classical ones
+            text = plan_file.read_text()
+            plan = plan_from_lines(text, "kairos plan")
+            if not plan.steps:
+                plan = _sequential_plan(text, "kairos plan")
+            return SolverOutcome(PlanStatus.SOLVED, plan)
         if proc.timed_out:
             return self.timeout_outcome(proc)
         status = self._STATUS.get(proc.returncode or 0, PlanStatus.ERROR)

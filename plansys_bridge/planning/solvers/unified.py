@@ -4,6 +4,13 @@ The engine runs in a child Python process (:mod:`.up_worker`) so the planner's
 timeout stops it even when the engine itself cannot be interrupted. Option
 ``engine`` names a unified-planning engine (``lpg``, ``fast-downward``, ``aries``,
 ``tamer``, ...); without it unified-planning picks one for the problem kind.
+
+Declared features: classical ADL, which the engines of the ``planners`` extra plan
+through unified-planning (Fast Downward). Its LPG engine cannot read LPG-td's own
+plan output (the stray ``)``), so temporal tasks go to the ``lpg`` solver, which
+drives the same binary directly; install a temporal engine (``up-aries``,
+``up-tamer``) and pass ``engine`` to use one, knowing the planner then refuses
+nothing: the engine's own error comes back in the message.
 """
 
 from __future__ import annotations
@@ -15,7 +22,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import ClassVar
 
-from plansys_bridge.planning.capabilities import ALL_CAPABILITIES, Capability
+from plansys_bridge.planning.capabilities import Capability
 from plansys_bridge.planning.result import PlanStatus
 from plansys_bridge.planning.solvers import up_worker
 from plansys_bridge.planning.solvers.base import SolverOutcome
@@ -31,8 +38,21 @@ _STATUS = {
 
 class UnifiedPlanningSolver(ExternalSolver):
     name = "unified-planning"
-    capabilities: ClassVar[frozenset[Capability]] = ALL_CAPABILITIES
-    """unified-planning itself reads every feature; the engine it picks decides."""
+    capabilities: ClassVar[frozenset[Capability]] = frozenset(
+        {
+            Capability.NEGATIVE_PRECONDITIONS,
+            Capability.DISJUNCTIVE_PRECONDITIONS,
+            Capability.EXISTENTIAL_PRECONDITIONS,
+            Capability.UNIVERSAL_PRECONDITIONS,
+            Capability.CONDITIONAL_EFFECTS,
+            Capability.EQUALITY,
+        }
+    )
+
+    def missing_capabilities(self, required: frozenset[Capability]) -> frozenset[Capability]:
+        if "engine" in self.options:
+            return frozenset()  # the named engine decides, and says so when it cannot
+        return super().missing_capabilities(required)
     option_types: ClassVar[dict[str, type | tuple[type, ...]]] = {
         "engine": str,
         "keep_files": bool,
