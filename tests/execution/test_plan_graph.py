@@ -220,3 +220,77 @@ def test_ordered_subgoals_and_dot() -> None:
     assert 'g0 [label="1. (car_assembled car_1)"]' in dot
     assert "a6 -> g0" in dot
     assert "a3 -> a6" in dot
+
+
+def _random_linearisation_is_valid(graph, domain, state, rng) -> list[str]:  # type: ignore[no-untyped-def]
+    """Run the happenings in a random order that respects the graph; return every
+    condition that fails on the way (none, if the graph is sound)."""
+    from plansys_bridge.knowledge.evaluation import Evaluator
+
+    ev = Evaluator(domain)
+    n = len(graph.steps)
+    preds: dict[int, set[int]] = {h: set() for h in range(2 * n)}
+    for i in range(n):
+        preds[2 * i + 1].add(2 * i)
+    for o in graph.orderings:
+        src = 2 * o.source + (o.source_point == "end")
+        dst = 2 * o.target + (o.target_point == "end")
+        preds[dst].add(src)
+    done: set[int] = set()
+    running: set[int] = set()
+    errors: list[str] = []
+    while len(done) < 2 * n:
+        ready = [h for h in range(2 * n) if h not in done and preds[h] <= done]
+        h = rng.choice(ready)
+        i, is_end = divmod(h, 2)
+        g, dur = graph.ground[i], graph.steps[i].duration
+        cond = g.at_end if is_end else g.at_start
+        if not ev.holds(cond, state, g.bindings, dur):
+            errors.append(f"{graph.steps[i].text} {'end' if is_end else 'start'}")
+        state = ev.apply(g.end_effect if is_end else g.start_effect, state, g.bindings, dur)
+        if is_end:
+            running.discard(i)
+        else:
+            running.add(i)
+        for j in running:
+            gj = graph.ground[j]
+            if not ev.holds(gj.over_all, state, gj.bindings, graph.steps[j].duration):
+                errors.append(f"{graph.steps[j].text} over all")
+        done.add(h)
+    return errors
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_every_order_the_graph_allows_is_valid(seed: int) -> None:
+    import random
+
+    from plansys_bridge.planning.planner import Planner
+
+    rng = random.Random(seed)
+    domain = load_domain("factory.pddl")
+    k = knowledge_from(domain, "problem_factory_1.pddl")
+    plan = Planner(timeout=30.0).solve(domain, k.to_problem()).plan
+    assert plan is not None
+    graph = build_plan_graph(plan, domain, k.state())
+    graph.check()
+    assert _random_linearisation_is_valid(graph, domain, k.state(), rng) == []
+    door, dk = door_setup()
+    door_plan = parse_plan(
+        "0.000: (hold_open holder d1) [10.000]\n"
+        "0.001: (pass walker d1) [3.000]\n"
+        "0.002: (pass walker2 d1) [3.000]\n"
+    )
+    door_graph = build_plan_graph(door_plan, door, dk.state())
+    assert _random_linearisation_is_valid(door_graph, door, dk.state(), rng) == []
+
+
+def test_the_linearisation_check_catches_a_graph_without_orderings() -> None:
+    import dataclasses
+    import random
+
+    domain = load_domain("factory.pddl")
+    k = knowledge_from(domain, "problem_factory_1.pddl")
+    graph = build_plan_graph(parse_plan(FACTORY_PLAN), domain, k.state())
+    unordered = dataclasses.replace(graph, orderings=())
+    rng = random.Random(1)
+    assert any(_random_linearisation_is_valid(unordered, domain, k.state(), rng) for _ in range(5))
