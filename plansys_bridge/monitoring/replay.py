@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from rosbags.highlevel import AnyReader, AnyReaderError
 from rosbags.rosbag2 import ReaderError
 from rosbags.serde import SerdeError
@@ -106,10 +107,15 @@ class RecordedMission:
         return Counter((a.action, a.performer, a.outcome) for a in self.actions)
 
 
+def _float32(value: float) -> float:
+    """The shortest decimal that a float32 field stands for (3.000999927 -> 3.001)."""
+    return float(str(np.float32(value)))
+
+
 def _plan_from_ros(msg: Any) -> hm.Plan:
     return hm.Plan(
         tuple(
-            hm.PlanItem(time=float(i.time), action=i.action, duration=float(i.duration))
+            hm.PlanItem(time=_float32(i.time), action=i.action, duration=_float32(i.duration))
             for i in msg.items
         )
     )
@@ -183,8 +189,12 @@ def _track(
     if record is None:
         return
     if kind is hm.ExecutionType.CONFIRM:
+        # A later CONFIRM is a re-auction after a lost performer: the new one counts.
         record.performer = msg.node_id
         record.started = now
+        record.cancelled = False
+        record.success = None
+        record.finished = None
     elif kind is hm.ExecutionType.FEEDBACK and msg.node_id == record.performer:
         record.completion = float(msg.completion)
     elif kind is hm.ExecutionType.FINISH and msg.node_id == record.performer:
