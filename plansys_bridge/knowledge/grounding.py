@@ -143,13 +143,6 @@ def substitute_effect(effect: Effect, b: Mapping[str, str]) -> Effect:
     raise TypeError(f"not an effect: {effect!r}")
 
 
-def format_number(value: float) -> str:
-    """``3`` for integral values, ``2.5`` otherwise (PDDL-friendly, no exponent)."""
-    if value == int(value) and abs(value) < 1e15:
-        return str(int(value))
-    return repr(float(value))
-
-
 @dataclass(frozen=True, eq=False)
 class GroundAction:
     """An action with its parameters replaced by objects.
@@ -194,7 +187,6 @@ __all__ = [
     "GroundAction",
     "Number",
     "UnboundVariableError",
-    "format_number",
     "ground_args",
     "ground_term",
     "normalize_bindings",

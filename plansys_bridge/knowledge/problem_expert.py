@@ -27,7 +27,6 @@ from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.hub.messages import Knowledge
 from plansys_bridge.knowledge.domain_expert import DomainExpert
 from plansys_bridge.knowledge.evaluation import Evaluator
-from plansys_bridge.knowledge.grounding import format_number
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import (
     TRUE,
@@ -650,14 +649,15 @@ class ProblemExpert:
 
     def to_msg(self) -> Knowledge:
         """The knowledge as PlanSys2 publishes it."""
-        from plansys_bridge.pddl.writer import write_condition
+        from plansys_bridge.pddl.writer import write_condition, write_fluent_value
 
         with self._lock:
             return Knowledge(
                 instances=tuple(self.get_instances()),
                 predicates=tuple(str(a) for a in self._facts),
                 functions=tuple(
-                    f"(= {_fluent_text(k)} {format_number(v)})" for k, v in self._fluents.items()
+                    write_fluent_value(FluentValue(FluentRef(*k), v))
+                    for k, v in self._fluents.items()
                 ),
                 goal=write_condition(self._goal) if self._goal is not None else "",
             )
