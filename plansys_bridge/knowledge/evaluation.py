@@ -524,7 +524,8 @@ class Evaluator:
                 extra, body = self._renamed(c)
                 merged = dict(var_types)
                 merged.update(extra)
-                yield from self._join(rest + body + conjuncts[i + 1 :], b, merged, ctx)
+                kept = [*rest, *(x for x in (best, branch) if x is not None)]
+                yield from self._join(kept + body + conjuncts[i + 1 :], b, merged, ctx)
                 return
             if isinstance(c, Atom):
                 size = len(ctx.tuples(c.predicate))

@@ -353,3 +353,21 @@ def test_reach_is_transitive_closure(ev: Evaluator, links: set[Atom]) -> None:
     for p in PLACES:
         expected = all(q == p or (p, q) not in closure for q in PLACES)
         assert ev.holds(Atom("isolated", (p,)), s) == expected
+
+
+def test_exists_after_an_atom_in_a_conjunction(ev: Evaluator) -> None:
+    """The join keeps conjuncts it set aside when it opens an ``exists``."""
+    s = world("(at r1 hall)", "(link roof lab)", "(lit roof)")
+    c = cond(
+        ev,
+        "(exists (?r - robot ?p - place) (and (at ?r ?p) (lit ?p) (exists (?q - place) (link ?p ?q))))",
+    )
+    assert not ev.holds(c, s)  # r1 is in the hall, which is not lit
+    assert ev.holds(c, s.with_changes(adds=[Atom("at", ("r2", "roof"))]))
+    d = cond(
+        ev,
+        "(exists (?p - place) (and (or (lit ?p) (at r2 ?p)) (exists (?q - place) (link ?p ?q))))",
+    )
+    s2 = world("(link hall lab)", "(lit roof)")
+    assert not ev.holds(d, s2)
+    assert ev.holds(d, s2.with_changes(adds=[Atom("at", ("r2", "hall"))]))
