@@ -1,0 +1,41 @@
+"""``plansys-bridge demo``: the main demo mission, on embedded defaults.
+
+No hardware, no servers: the cooking world with three simulated robots, a battery
+drop that forces a replan, on the wall clock 10x faster than mission time.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from plansys_bridge.cli import run_cmd
+from plansys_bridge.mission import default_missions_dir
+
+DEMOS = {
+    "cooking": "demo_cooking.yaml",
+}
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser("demo", help="run a demo mission (default: cooking, 3 robots, a replan)")
+    p.add_argument("name", nargs="?", default="cooking", choices=sorted(DEMOS))
+    p.add_argument("--clock", choices=("wall", "virtual"), help="override the demo's clock")
+    p.add_argument("--time-scale", type=float, help="override the wall clock's time scale")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.set_defaults(func=handle)
+
+
+def handle(args: argparse.Namespace) -> int:
+    mission = default_missions_dir() / DEMOS[args.name]
+    ns = argparse.Namespace(
+        mission=str(mission),
+        plan=None,
+        clock=args.clock,
+        time_scale=args.time_scale,
+        record=None,
+        json=args.json,
+        quiet=False,
+        verbose=False,
+    )
+    return run_cmd.handle(ns)

@@ -1,0 +1,83 @@
+"""``plansys-bridge run MISSION.yaml``: run a mission file to its end."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+from typing import Any
+
+from plansys_bridge.mission import MissionReport, run_mission
+from plansys_bridge.mission_config import load_mission
+from plansys_bridge.planning.plan import Plan, parse_plan
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser("run", help="run a mission file (domain, knowledge, goal, performers)")
+    p.add_argument("mission", help="mission YAML file (see configs/)")
+    p.add_argument("--plan", help="execute this plan file instead of planning first")
+    p.add_argument("--clock", choices=("wall", "virtual"), help="override the mission's clock")
+    p.add_argument("--time-scale", type=float, help="override clock.time_scale (wall clock)")
+    p.add_argument("--record", help="record the run to this ROS 2 bag folder (mcap)")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.add_argument("-q", "--quiet", action="store_true", help="print only the summary")
+    p.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    p.set_defaults(func=handle)
+
+
+def handle(args: argparse.Namespace) -> int:
+    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING)
+    mission = load_mission(args.mission)
+    updates: dict[str, Any] = {}
+    if args.clock or args.time_scale:
+        clock = mission.clock.model_copy(
+            update={k: v for k, v in (("kind", args.clock), ("time_scale", args.time_scale)) if v}
+        )
+        updates["clock"] = clock
+    if args.record:
+        updates["record"] = args.record
+    if updates:
+        mission = mission.model_copy(update=updates)
+    plan: Plan | None = None
+    if args.plan:
+        with open(args.plan, encoding="utf-8") as f:
+            plan = parse_plan(f.read(), args.plan)
+    quiet = args.quiet or args.json
+    report = run_mission(mission, out=None if quiet else print, plan=plan)
+    if args.json:
+        print(json.dumps(report_json(report), indent=2))
+    else:
+        print(report.summary())
+    return 0 if report.success else 1
+
+
+def report_json(report: MissionReport) -> dict[str, Any]:
+    r = report.result
+    out: dict[str, Any] = {
+        "mission": report.name,
+        "success": report.success,
+        "status": report.status,
+        "message": report.message,
+        "planning_s": round(report.planning_s, 4),
+        "events": report.events_applied,
+    }
+    if r is not None:
+        out |= {
+            "plans": len(r.plans),
+            "replans": r.replans,
+            "actions": len(r.actions),
+            "failures": r.failures,
+            "total_time_s": round(r.total_time, 3),
+            "efficiency_percent": round(r.efficiency_percent, 2),
+            "records": [
+                {
+                    "action": a.text,
+                    "status": a.status.name,
+                    "start": a.start,
+                    "end": a.end,
+                    "performer": a.performer,
+                }
+                for a in r.actions
+            ],
+        }
+    return out

@@ -1,0 +1,376 @@
+"""Run a mission file: knowledge in, plan, performers, execution, summary out.
+
+This is what ``plansys-bridge run CONFIG.yaml`` does, and what the demo, the
+adapters' example configs and the end-to-end tests go through, so there is one
+way to start a mission. Everything a run needs is built from the validated
+:class:`~plansys_bridge.mission_config.MissionConfig`; performer kinds are found
+through the ``plansys_bridge.performers`` entry points only.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from plansys_bridge.clock import Clock, VirtualClock, WallClock, run
+from plansys_bridge.errors import ConfigError, PlansysBridgeError
+from plansys_bridge.execution.executor import Executor
+from plansys_bridge.execution.options import ExecutorOptions
+from plansys_bridge.execution.results import ExecutionResult
+from plansys_bridge.hub.auction import AuctionPolicy
+from plansys_bridge.hub.hub import Hub
+from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, Topics
+from plansys_bridge.hub.transport import InProcessTransport
+from plansys_bridge.knowledge.problem_expert import ProblemExpert
+from plansys_bridge.mission_config import EventConfig, MissionConfig
+from plansys_bridge.pddl.model import Domain
+from plansys_bridge.pddl.parser import parse_domain_files
+from plansys_bridge.performers.base import ActionPerformer, PerformerContext
+from plansys_bridge.performers.registry import performers_from_config
+from plansys_bridge.planning.plan import Plan
+from plansys_bridge.planning.planner import Planner
+
+__all__ = ["MissionReport", "MissionSession", "build_knowledge", "make_clock", "run_mission"]
+
+log = logging.getLogger(__name__)
+
+Printer = Callable[[str], None]
+
+
+@dataclass
+class MissionReport:
+    """What a mission run ends with; ``result`` holds every action's record."""
+
+    name: str
+    success: bool
+    status: str
+    message: str
+    result: ExecutionResult | None
+    planning_s: float = 0.0
+    events_applied: list[str] = field(default_factory=list)
+
+    def summary(self) -> str:
+        r = self.result
+        lines = [
+            f"mission {self.name}: {self.status.upper()}"
+            + (f" ({self.message})" if self.message else "")
+        ]
+        if r is not None:
+            done = sum(1 for a in r.actions if a.status == ActionStatus.SUCCEEDED)
+            lines += [
+                f"  plans: {len(r.plans)} (replans: {r.replans})",
+                f"  actions: {done} succeeded, {r.failures} failed or halted,"
+                f" {len(r.actions)} in all",
+                f"  mission time: {r.total_time:.1f} s, planning: {self.planning_s:.3f} s",
+                f"  efficiency: {r.efficiency_percent:.1f} % (action time / total time)",
+            ]
+        if self.events_applied:
+            lines.append(f"  events: {'; '.join(self.events_applied)}")
+        return "\n".join(lines)
+
+
+def make_clock(mission: MissionConfig) -> Clock:
+    if mission.clock.kind == "virtual":
+        return VirtualClock()
+    return WallClock(time_scale=mission.clock.time_scale)
+
+
+def build_knowledge(mission: MissionConfig, domain: Domain) -> ProblemExpert:
+    """The problem expert with the mission's problem file and inline knowledge.
+
+    All of it goes in one transaction: a bad entry leaves nothing half-loaded, and
+    the error names the entry's key in the mission file.
+    """
+    knowledge = ProblemExpert(domain)
+    with knowledge.transaction():
+        if mission.problem is not None:
+            path = mission.resolve(mission.problem)
+            with _keyed(mission, "problem"):
+                try:
+                    text = path.read_text(encoding="utf-8")
+                except OSError as exc:
+                    raise ConfigError(f"cannot read {path}: {exc.strerror}") from exc
+                knowledge.load_problem(text, filename=str(path))
+        for name, type_name in mission.knowledge.instances.items():
+            with _keyed(mission, f"knowledge.instances.{name}"):
+                knowledge.add_instance(name, type_name)
+        for i, fact in enumerate(mission.knowledge.predicates):
+            with _keyed(mission, f"knowledge.predicates[{i}]"):
+                knowledge.add_predicate(fact)
+        for i, value in enumerate(mission.knowledge.functions):
+            with _keyed(mission, f"knowledge.functions[{i}]"):
+                knowledge.set_function(value)
+        if mission.goal is not None:
+            with _keyed(mission, "goal"):
+                knowledge.set_goal(mission.goal)
+    return knowledge
+
+
+@contextlib.contextmanager
+def _keyed(mission: MissionConfig, key: str) -> Iterator[None]:
+    """Turn a refused change into a ConfigError naming the mission file's key."""
+    try:
+        yield
+    except PlansysBridgeError as exc:
+        raise ConfigError(str(exc), key=key, file=mission.source) from exc
+
+
+def executor_options(mission: MissionConfig) -> ExecutorOptions:
+    a = mission.auction
+    return ExecutorOptions(
+        auction=AuctionPolicy(
+            retry_period=a.retry_period,
+            give_up_after=a.give_up_after,
+            selection=a.selection,
+            bid_window=a.bid_window,
+            liveness_timeout=a.liveness_timeout,
+            reauctions=a.reauctions,
+        ),
+        at_start_timeout=mission.executor.at_start_timeout,
+        overrun_percentage=mission.executor.overrun_percentage,
+        max_replans=mission.replanning.max_replans,
+    )
+
+
+class MissionSession:
+    """A hub with its performers, knowledge publishing, events and recorder, started.
+
+    Used as ``async with MissionSession(...) as session:`` so that performers are
+    stopped, the recorder flushed and the hub closed whatever happens.
+    """
+
+    def __init__(
+        self,
+        mission: MissionConfig,
+        domain: Domain,
+        knowledge: ProblemExpert,
+        clock: Clock,
+        *,
+        out: Printer | None = None,
+        performer_overrides: dict[str, Any] | None = None,
+    ) -> None:
+        self.mission = mission
+        self.domain = domain
+        self.knowledge = knowledge
+        self.hub = Hub(InProcessTransport(), clock)
+        self.out = out
+        self.performers: list[ActionPerformer] = []
+        self.recorder: Any = None
+        self.events_applied: list[str] = []
+        self._overrides = performer_overrides or {}
+        self._tasks: list[asyncio.Task[None]] = []
+        self._unsubscribe: Callable[[], None] | None = None
+
+    async def __aenter__(self) -> MissionSession:
+        await self.hub.start()
+        try:
+            if self.mission.record:
+                from plansys_bridge.monitoring.recorder import MissionRecorder
+
+                self.recorder = MissionRecorder(
+                    self.hub, self.mission.resolve(self.mission.record)
+                ).start()
+            context = PerformerContext(
+                hub=self.hub,
+                clock=self.hub.clock,
+                knowledge=self.knowledge,
+                base_dir=self.mission.base_dir,
+                recorder=self.recorder,
+            )
+            entries = [p.model_dump() | self._overrides for p in self.mission.performers]
+            self.performers = performers_from_config(entries, context)
+            for performer in self.performers:
+                await performer.start()
+            self.hub.publish(Topics.KNOWLEDGE, self.knowledge.to_msg())
+            self._unsubscribe = self.knowledge.subscribe(
+                lambda _change: self.hub.publish(Topics.KNOWLEDGE, self.knowledge.to_msg())
+            )
+            loop = asyncio.get_running_loop()
+            for event in self.mission.events:
+                self._tasks.append(loop.create_task(self._event(event)))
+        except BaseException:
+            await self._shutdown()
+            raise
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self._shutdown()
+
+    async def _shutdown(self) -> None:
+        for task in self._tasks:
+            task.cancel()
+        for task in self._tasks:
+            with contextlib.suppress(asyncio.CancelledError):
+                await task
+        if self._unsubscribe is not None:
+            self._unsubscribe()
+        for performer in reversed(self.performers):
+            try:
+                await performer.stop()
+            except Exception:  # a broken adapter must not keep the others running
+                log.exception("stopping performer %s failed", performer.node_name)
+        if self.recorder is not None:
+            self.recorder.close()
+        await self.hub.close()
+
+    async def _event(self, event: EventConfig) -> None:
+        await self.hub.clock.sleep(event.at)
+        self.apply_event(event)
+
+    def apply_event(self, event: EventConfig) -> None:
+        try:
+            if event.add_predicate:
+                self.knowledge.add_predicate(event.add_predicate)
+                text = f"+{event.add_predicate}"
+            elif event.remove_predicate:
+                self.knowledge.remove_predicate(event.remove_predicate)
+                text = f"-{event.remove_predicate}"
+            else:
+                self.knowledge.set_function(event.set_function or "")
+                text = f"{event.set_function}"
+        except PlansysBridgeError as exc:
+            self._say(f"[{event.at:8.1f}] event refused: {exc}")
+            return
+        self.events_applied.append(f"t={event.at:g} {text}")
+        self._say(f"[{event.at:8.1f}] event: {text}")
+
+    def _say(self, text: str) -> None:
+        if self.out is not None:
+            self.out(text)
+
+
+def progress_printer(
+    out: Printer, start: Callable[[], float]
+) -> Callable[[ActionExecutionInfo], None]:
+    """Print one line per action status change (not per feedback)."""
+    last: dict[str, ActionStatus] = {}
+
+    def on_info(info: ActionExecutionInfo) -> None:
+        if last.get(info.action_full_name) == info.status:
+            return
+        last[info.action_full_name] = info.status
+        extra = (
+            f" - {info.message_status}"
+            if info.message_status and info.status != ActionStatus.EXECUTING
+            else ""
+        )
+        out(f"[{start():8.1f}] {info.status.name:<9} {info.action_full_name}{extra}")
+
+    return on_info
+
+
+async def plan_now(
+    planner: Planner, domain: Domain, knowledge: ProblemExpert
+) -> tuple[Plan, float]:
+    """Plan from the current knowledge in a worker thread; PlanningError when none."""
+    from plansys_bridge.errors import PlanningError
+
+    problem = knowledge.to_problem()
+    result = await asyncio.to_thread(planner.solve, domain, problem)
+    if result.plan is None:
+        raise PlanningError(
+            f"no plan ({result.status.name.lower()}, {result.solver}): {result.message}"
+        )
+    return result.plan, result.elapsed_s
+
+
+def run_mission(
+    mission: MissionConfig,
+    *,
+    out: Printer | None = print,
+    planner: Planner | None = None,
+    plan: Plan | None = None,
+) -> MissionReport:
+    """Run ``mission`` to its end on the clock it names; prints progress to ``out``."""
+    domain = parse_domain_files(mission.domain_paths)
+    knowledge = build_knowledge(mission, domain)
+    if knowledge.get_goal() is None:
+        raise ConfigError(
+            "the mission has no goal (neither in the problem nor as goal:)",
+            key="goal",
+            file=mission.source,
+        )
+    clock = make_clock(mission)
+    planner = planner or Planner()
+    return run(_run(mission, domain, knowledge, clock, planner, plan, out), clock)
+
+
+async def _run(
+    mission: MissionConfig,
+    domain: Domain,
+    knowledge: ProblemExpert,
+    clock: Clock,
+    planner: Planner,
+    plan: Plan | None,
+    out: Printer | None,
+) -> MissionReport:
+    t0 = clock.now()
+
+    def elapsed() -> float:
+        return clock.now() - t0
+
+    say = out or (lambda _s: None)
+    async with MissionSession(mission, domain, knowledge, clock, out=say) as session:
+        say(
+            f"mission {mission.name}: {len(session.performers)} performers,"
+            f" clock {mission.clock.kind}"
+        )
+        planning_s = 0.0
+        if plan is None:
+            try:
+                plan, planning_s = await plan_now(planner, domain, knowledge)
+            except PlansysBridgeError as exc:
+                return MissionReport(
+                    mission.name,
+                    False,
+                    "no plan",
+                    str(exc),
+                    None,
+                    events_applied=session.events_applied,
+                )
+        say(
+            f"plan ({len(plan)} actions, makespan {plan.makespan:.1f} s,"
+            f" planned in {planning_s:.3f} s):"
+        )
+        for line in plan.to_text().splitlines():
+            say(f"    {line}")
+        executor = Executor(session.hub, domain, knowledge, planner, executor_options(mission))
+        execute = executor.execute(
+            plan, goal=knowledge.get_goal(), on_info=progress_printer(say, elapsed)
+        )
+        try:
+            result = await (
+                asyncio.wait_for(execute, mission.timeout) if mission.timeout else execute
+            )
+        except TimeoutError:
+            return MissionReport(
+                mission.name,
+                False,
+                "timeout",
+                f"not done after {mission.timeout} s",
+                None,
+                planning_s,
+                session.events_applied,
+            )
+        for extra in result.plans[1:]:
+            say(f"replanned ({len(extra)} actions):")
+            for line in extra.to_text().splitlines():
+                say(f"    {line}")
+        return MissionReport(
+            mission.name,
+            result.success,
+            result.status,
+            result.message,
+            result,
+            planning_s,
+            list(session.events_applied),
+        )
+
+
+def default_missions_dir() -> Path:
+    return Path(__file__).resolve().parents[1] / "configs"
