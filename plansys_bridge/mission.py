@@ -65,7 +65,7 @@ class MissionReport:
             lines += [
                 f"  plans: {len(r.plans)} (replans: {r.replans})",
                 f"  actions: {done} succeeded, {r.failures} failed or halted,"
-                f" {len(r.actions)} in all",
+                f" {len(r.actions)} planned",
                 f"  mission time: {r.total_time:.1f} s, planning: {self.planning_s:.3f} s",
                 f"  efficiency: {r.efficiency_percent:.1f} % (action time / total time)",
             ]
@@ -256,7 +256,7 @@ def progress_printer(
         last[info.action_full_name] = info.status
         extra = (
             f" - {info.message_status}"
-            if info.message_status and info.status != ActionStatus.EXECUTING
+            if info.message_status and info.status in (ActionStatus.FAILED, ActionStatus.CANCELLED)
             else ""
         )
         out(f"[{start():8.1f}] {info.status.name:<9} {info.action_full_name}{extra}")
