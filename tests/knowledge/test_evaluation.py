@@ -360,7 +360,8 @@ def test_exists_after_an_atom_in_a_conjunction(ev: Evaluator) -> None:
     s = world("(at r1 hall)", "(link roof lab)", "(lit roof)")
     c = cond(
         ev,
-        "(exists (?r - robot ?p - place) (and (at ?r ?p) (lit ?p) (exists (?q - place) (link ?p ?q))))",
+        "(exists (?r - robot ?p - place)"
+        " (and (at ?r ?p) (lit ?p) (exists (?q - place) (link ?p ?q))))",
     )
     assert not ev.holds(c, s)  # r1 is in the hall, which is not lit
     assert ev.holds(c, s.with_changes(adds=[Atom("at", ("r2", "roof"))]))

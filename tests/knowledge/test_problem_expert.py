@@ -3,9 +3,13 @@ notifications, transactions and threads."""
 
 from __future__ import annotations
 
+import contextlib
 import threading
+from typing import Any
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from knowledge_paths import PROBLEM_EXPERT_PDDL, read
 
 from plansys_bridge.errors import KnowledgeError, PddlError, PlansysBridgeError
@@ -451,3 +455,95 @@ def test_domain_expert_shared_between_experts(pe_domain) -> None:  # type: ignor
     first, second = ProblemExpert(de), ProblemExpert(de)
     first.add_instance("r2d2", "robot")
     assert not second.exist_instance("r2d2")
+
+
+# ------------------------------------------------------------ properties
+
+_OBJECTS = [
+    ("r2d2", "robot"),
+    ("leia", "robot"),
+    ("kitchen", "room"),
+    ("hall", "room_with_teleporter"),
+]
+_operation = st.one_of(
+    st.tuples(st.just("add_instance"), st.sampled_from(_OBJECTS)),
+    st.tuples(st.just("remove_instance"), st.sampled_from([n for n, _ in _OBJECTS])),
+    st.tuples(
+        st.just("add_predicate"),
+        st.tuples(
+            st.sampled_from(["r2d2", "leia", "kitchen"]),
+            st.sampled_from(["kitchen", "hall", "leia"]),
+        ),
+    ),
+    st.tuples(
+        st.just("remove_predicate"),
+        st.tuples(st.sampled_from(["r2d2", "leia"]), st.sampled_from(["kitchen", "hall"])),
+    ),
+    st.tuples(
+        st.just("set_function"),
+        st.tuples(st.sampled_from(["kitchen", "hall"]), st.integers(-5, 5)),
+    ),
+)
+
+
+def _apply(pe: ProblemExpert, op: tuple[str, Any]) -> None:
+    """One operation; refused ones (unknown objects, wrong types) raise KnowledgeError."""
+    kind, arg = op
+    if kind == "add_instance":
+        pe.add_instance(arg[0], arg[1])
+    elif kind == "remove_instance":
+        pe.remove_instance(arg)
+    elif kind == "add_predicate":
+        pe.add_predicate(Atom("robot_at", arg))
+    elif kind == "remove_predicate":
+        pe.remove_predicate(Atom("robot_at", arg))
+    else:
+        pe.set_function(FluentValue(FluentRef("room_distance", (arg[0], "kitchen")), arg[1]))
+
+
+def _snapshot(pe: ProblemExpert) -> tuple[object, ...]:
+    return (pe.get_instances(), pe.get_predicates(), pe.get_functions(), pe.state())
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(before=st.lists(_operation, max_size=8), inside=st.lists(_operation, max_size=8))
+def test_transactions_are_all_or_nothing(
+    simple: ProblemExpert, before: list[tuple[str, Any]], inside: list[tuple[str, Any]]
+) -> None:
+    pe = ProblemExpert(simple.domain_expert)
+    for op in before:
+        with contextlib.suppress(KnowledgeError):
+            _apply(pe, op)
+    start, version = _snapshot(pe), pe.version
+
+    # a failing transaction leaves everything as it was
+    with pytest.raises(RuntimeError), pe.transaction():
+        for op in inside:
+            with contextlib.suppress(KnowledgeError):
+                _apply(pe, op)
+        raise RuntimeError("abort")
+    assert _snapshot(pe) == start and pe.version == version
+
+    # a committed transaction equals the same operations made one by one
+    twin = ProblemExpert(simple.domain_expert)
+    for op in before:
+        with contextlib.suppress(KnowledgeError):
+            _apply(twin, op)
+    changes: list[KnowledgeChange] = []
+    pe.subscribe(changes.append)
+    with pe.transaction():
+        for op in inside:
+            with contextlib.suppress(KnowledgeError):
+                _apply(pe, op)
+    for op in inside:
+        with contextlib.suppress(KnowledgeError):
+            _apply(twin, op)
+    assert _snapshot(pe) == _snapshot(twin)
+    assert len(changes) == (0 if _snapshot(pe) == start else 1)
+    # the state snapshot agrees with the listings
+    assert pe.state().facts == set(pe.get_predicates())
+    assert dict(pe.state().fluents) == {
+        (f.fluent.name, f.fluent.args): f.value for f in pe.get_functions()
+    }
