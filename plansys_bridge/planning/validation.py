@@ -21,7 +21,7 @@ condition, with numeric values where they explain the failure.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 from plansys_bridge.errors import PlansysBridgeError
@@ -107,7 +107,11 @@ class _Happening:
 
     @property
     def when(self) -> str:
-        return {"start": "at start", "end": "at end", "instant": "precondition"}[self.point]
+        return {
+            "start": "at start condition",
+            "end": "at end condition",
+            "instant": "precondition",
+        }[self.point]
 
     @property
     def effect(self) -> Effect:
@@ -271,11 +275,14 @@ class _Validator:
         recent: list[tuple[float, list[tuple[_Happening, _Footprint]]]],
     ) -> State:
         now = group[0].time
+        prints = [(h, self._footprint(h, state)) for h in group]
         for h in group:
             if h.point == "start":
                 self._check_duration(h, state)
-            self._check(h, h.condition, h.when, state)
-        prints = [(h, self._footprint(h, state)) for h in group]
+            try:
+                self._check(h, h.condition, h.when, state)
+            except _Invalid as exc:
+                raise self._explain_simultaneous(exc, h, prints) from None
         for a in range(len(prints)):
             for b in range(a + 1, len(prints)):
                 ha, fa = prints[a]
@@ -309,8 +316,27 @@ class _Validator:
             h = open_steps[index]
             end = h.time + (h.duration or 0.0)
             if end - now > SAME_TIME:
-                self._check(h, h.ground.over_all, "over all", state, now)
+                self._check(h, h.ground.over_all, "over all condition", state, now)
         return state
+
+    def _explain_simultaneous(
+        self, exc: _Invalid, h: _Happening, prints: list[tuple[_Happening, _Footprint]]
+    ) -> _Invalid:
+        """A condition false only because its achiever happens at the same time: say so."""
+        failing = exc.report.failing_condition
+        for other, footprint in prints:
+            if other.index == h.index or failing is None:
+                continue
+            if failing in {str(a) for a in footprint.adds | footprint.deletes}:
+                step = self.plan.steps[other.index]
+                hint = (
+                    f" (the {other.point} of step {other.index + 1} {step.text} changes it "
+                    f"at the same time; happenings that depend on each other must be "
+                    f"{self.epsilon:g} apart)"
+                )
+                report = replace(exc.report, message=exc.report.message + hint)
+                return _Invalid(report)
+        return exc
 
     def _check_separation(
         self,
@@ -330,7 +356,7 @@ class _Validator:
                         other = self.plan.steps[ha.index]
                         raise self.fail(
                             hb.index,
-                            f"its {hb.point} is only {now - then:.6f} after the {ha.point} of "
+                            f"its {hb.point} is only {_t(now - then)} after the {ha.point} of "
                             f"step {ha.index + 1} {other.text} and both touch {shared} "
                             f"(happenings that interfere must be {self.epsilon:g} apart)",
                             shared,
@@ -379,14 +405,14 @@ class _Validator:
         except PlansysBridgeError as exc:
             raise self.fail(
                 h.index,
-                f"{when} condition cannot be evaluated: {exc}",
+                f"{when} cannot be evaluated: {exc}",
                 None,
                 time if time is not None else h.time,
             ) from exc
         text = _describe(failing, state, self.ev, h.duration)
         moment = time if time is not None else h.time
-        suffix = f" at {_t(moment)}" if when == "over all" else ""
-        raise self.fail(h.index, f"{when} condition {text} is false{suffix}", text, moment)
+        suffix = f" at {_t(moment)}" if when.startswith("over all") else ""
+        raise self.fail(h.index, f"{when} {text} is false{suffix}", text, moment)
 
     def _first_false(self, cond: Condition, state: State, duration: float | None) -> Condition:
         if isinstance(cond, And):

@@ -57,7 +57,7 @@ TEMPORAL_PROBLEM = """
 """
 
 NUMERIC_DOMAIN = """
-(define (domain battery)
+(define (domain energy)
   (:requirements :strips :typing :durative-actions :fluents)
   (:types robot room)
   (:predicates (robot_at ?r - robot ?x - room) (connected ?a ?b - room))
@@ -72,7 +72,7 @@ NUMERIC_DOMAIN = """
 """
 
 NUMERIC_PROBLEM = """
-(define (problem battery_1) (:domain battery)
+(define (problem energy_1) (:domain energy)
   (:objects r1 - robot a b c - room)
   (:init (robot_at r1 a) (connected a b) (connected b c)
          (= (battery r1) 20) (= (distance a b) 4) (= (distance b c) 6))

@@ -47,7 +47,7 @@ _TEMPORAL = frozenset(
         Capability.EQUALITY,
     }
 )
-_CLASSICAL_ADL = frozenset(
+CLASSICAL_ADL = frozenset(
     {
         Capability.NEGATIVE_PRECONDITIONS,
         Capability.DISJUNCTIVE_PRECONDITIONS,
@@ -294,7 +294,7 @@ class LpgSolver(ExternalSolver):
 class FastDownwardSolver(ExternalSolver):
     name = "fast-downward"
     executables = ("fast-downward", "fast-downward.py")
-    capabilities: ClassVar[frozenset[Capability]] = _CLASSICAL_ADL
+    capabilities: ClassVar[frozenset[Capability]] = CLASSICAL_ADL
     option_types: ClassVar[dict[str, type | tuple[type, ...]]] = {
         **ExternalSolver.option_types,
         "alias": str,

@@ -26,7 +26,11 @@ from plansys_bridge.planning.capabilities import Capability
 from plansys_bridge.planning.result import PlanStatus
 from plansys_bridge.planning.solvers import up_worker
 from plansys_bridge.planning.solvers.base import SolverOutcome
-from plansys_bridge.planning.solvers.external import ExternalSolver, plan_from_lines
+from plansys_bridge.planning.solvers.external import (
+    CLASSICAL_ADL,
+    ExternalSolver,
+    plan_from_lines,
+)
 from plansys_bridge.planning.solvers.process import ProcessResult
 
 _STATUS = {
@@ -38,21 +42,13 @@ _STATUS = {
 
 class UnifiedPlanningSolver(ExternalSolver):
     name = "unified-planning"
-    capabilities: ClassVar[frozenset[Capability]] = frozenset(
-        {
-            Capability.NEGATIVE_PRECONDITIONS,
-            Capability.DISJUNCTIVE_PRECONDITIONS,
-            Capability.EXISTENTIAL_PRECONDITIONS,
-            Capability.UNIVERSAL_PRECONDITIONS,
-            Capability.CONDITIONAL_EFFECTS,
-            Capability.EQUALITY,
-        }
-    )
+    capabilities: ClassVar[frozenset[Capability]] = CLASSICAL_ADL - {Capability.DERIVED_PREDICATES}
 
     def missing_capabilities(self, required: frozenset[Capability]) -> frozenset[Capability]:
         if "engine" in self.options:
             return frozenset()  # the named engine decides, and says so when it cannot
         return super().missing_capabilities(required)
+
     option_types: ClassVar[dict[str, type | tuple[type, ...]]] = {
         "engine": str,
         "keep_files": bool,
