@@ -13,11 +13,12 @@ from plansys_bridge_adapters.can.dbc import VelocityCommand
 from plansys_bridge_adapters.can.double import BaseDoubleConfig
 from plansys_bridge_adapters.can.performer import CanBasePerformer
 
-from plansys_bridge.clock import run
+from plansys_bridge.clock import WallClock, run
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome, AuctionPolicy
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.messages import PerformerState
+from plansys_bridge.hub.transport import InProcessTransport
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.pddl.parser import parse_domain
 from plansys_bridge.performers.base import PerformerContext
@@ -383,3 +384,20 @@ def test_unopenable_interface_is_named(hub: Hub) -> None:
             await performer.start()
 
     run(main(), hub.clock)
+
+
+def test_move_on_a_scaled_wall_clock_with_the_notifier_reader(channel: str) -> None:
+    """Real threads and real time (4x faster): python-can's Notifier feeds the performer."""
+    clock = WallClock(time_scale=0.25)
+    hub = Hub(InProcessTransport(), clock)
+
+    async def scenario(rig: Rig) -> None:
+        assert rig.performer.client.bus is not None
+        outcome = await move(rig, "hall")
+        assert outcome.success, outcome.status
+        assert math.hypot(rig.double.model.x - 1.0, rig.double.model.y) <= 0.05
+
+    # Generous timeouts: a loaded test machine must not fake a lost heartbeat.
+    play(hub, channel, scenario,
+         safety={"heartbeat_timeout": 2.0, "odometry_timeout": 2.0, "startup_timeout": 5.0},
+         bus={"interface": "virtual", "channel": channel, "reader": "notifier"})

@@ -1,0 +1,157 @@
+"""The bus client: both readers, classification of what arrives, driver errors."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+
+import can
+import pytest
+from plansys_bridge_adapters.can.bus import (
+    BusConfig,
+    BusOpenError,
+    BusSendError,
+    CanBusClient,
+    describe_frame,
+)
+from plansys_bridge_adapters.can.dbc import Frame, MobileBaseDbc, OdomPose, OdomTwist
+from plansys_bridge_adapters.can.monitor import describe_error_frame
+
+from plansys_bridge.clock import VirtualClock, WallClock, run
+
+DBC = MobileBaseDbc.load()
+
+
+class Sink:
+    def __init__(self) -> None:
+        self.frames: list[Frame] = []
+        self.error_frames: list[can.Message] = []
+        self.bus_errors: list[Exception] = []
+        self.arrived = asyncio.Event()
+
+    def on_frame(self, frame: Frame) -> None:
+        self.frames.append(frame)
+        self.arrived.set()
+
+    def on_error_frame(self, msg: can.Message) -> None:
+        self.error_frames.append(msg)
+
+    def on_bus_error(self, exc: Exception) -> None:
+        self.bus_errors.append(exc)
+
+
+class Raising(Sink):
+    def on_frame(self, frame: Frame) -> None:
+        super().on_frame(frame)
+        if len(self.frames) == 1:
+            raise RuntimeError("listener bug")
+
+
+def test_notifier_reader_on_the_wall_clock(channel: str) -> None:
+    """python-can's Notifier + AsyncBufferedReader, its thread stopped on close."""
+
+    async def main() -> None:
+        sink = Sink()
+        client = CanBusClient(BusConfig(channel=channel, reader="notifier"), DBC, sink)
+        other = can.Bus(interface="virtual", channel=channel)
+        await client.open()
+        try:
+            other.send(DBC.encode(OdomPose(1.0, 2.0, 0.5)))
+            other.send(can.Message(arbitration_id=0x7FF, is_extended_id=False, data=b"\x01"))
+            other.send(DBC.encode(OdomTwist(0.1, 0.0, 3)))
+            for _ in range(200):
+                if len(sink.frames) == 2:
+                    break
+                await asyncio.sleep(0.01)
+        finally:
+            await client.close()
+            other.shutdown()
+        assert sink.frames == [OdomPose(1.0, 2.0, 0.5), OdomTwist(0.1, 0.0, 3)]
+        assert client.counters.malformed == {"unknown_id": 1}
+        assert not client.is_open
+
+    run(main(), WallClock())
+
+
+def test_poll_reader_sorts_frames_errors_and_garbage(channel: str) -> None:
+    async def main() -> None:
+        sink = Sink()
+        client = CanBusClient(BusConfig(channel=channel), DBC, sink)
+        other = can.Bus(interface="virtual", channel=channel)
+        await client.open(reader="poll")
+        try:
+            other.send(can.Message(arbitration_id=0x040, is_error_frame=True, dlc=8,
+                                   data=bytes(8)))
+            other.send(can.Message(arbitration_id=0x200, is_extended_id=False, data=b"\x00"))
+            other.send(DBC.encode(OdomPose(0.0, 0.0, 0.0)))
+            await asyncio.sleep(0.05)
+        finally:
+            await client.close()
+            other.shutdown()
+        assert sink.frames == [OdomPose(0.0, 0.0, 0.0)]
+        assert [describe_error_frame(m) for m in sink.error_frames] == ["bus-off"]
+        assert client.counters.malformed == {"bad_dlc": 1}
+        assert client.counters.received == 3 and client.counters.decoded == 1
+
+    run(main(), VirtualClock())
+
+
+def test_a_listener_bug_does_not_stop_the_reader(
+    channel: str, caplog: pytest.LogCaptureFixture
+) -> None:
+    async def main() -> None:
+        sink = Raising()
+        client = CanBusClient(BusConfig(channel=channel), DBC, sink)
+        other = can.Bus(interface="virtual", channel=channel)
+        await client.open(reader="poll")
+        try:
+            for i in range(3):
+                other.send(DBC.encode(OdomTwist(0.0, 0.0, i)))
+            await asyncio.sleep(0.05)
+        finally:
+            await client.close()
+            other.shutdown()
+        assert len(sink.frames) == 3
+
+    with caplog.at_level(logging.ERROR):
+        run(main(), VirtualClock())
+    assert any("error handling 0x201" in r.getMessage() for r in caplog.records)
+
+
+def test_driver_error_reaches_the_listener_and_sending_fails(channel: str) -> None:
+    async def main() -> None:
+        sink = Sink()
+        client = CanBusClient(BusConfig(channel=channel), DBC, sink)
+        await client.open(reader="poll")
+        assert client.bus is not None
+        client.bus.shutdown()  # the interface vanishes under the reader
+        await asyncio.sleep(0.05)
+        with pytest.raises(BusSendError, match=f"CAN bus error on virtual:{channel}"):
+            client.send_frame(OdomPose(0.0, 0.0, 0.0))
+        await client.close()
+        assert client.counters.bus_errors >= 1 and client.counters.send_errors == 1
+        assert sink.bus_errors and "closed bus" in str(sink.bus_errors[0])
+        with pytest.raises(BusSendError, match="not open"):
+            client.send_frame(OdomPose(0.0, 0.0, 0.0))
+
+    run(main(), VirtualClock())
+
+
+def test_unknown_interface_is_a_clear_error() -> None:
+    async def main() -> None:
+        client = CanBusClient(BusConfig(interface="nosuchcan", channel="can0"), DBC, Sink())
+        with pytest.raises(BusOpenError, match="cannot open CAN bus nosuchcan:can0"):
+            await client.open()
+        assert not client.is_open
+
+    run(main(), VirtualClock())
+
+
+def test_frames_are_described_for_logs() -> None:
+    assert describe_frame(can.Message(arbitration_id=0x201, is_extended_id=False,
+                                      data=b"\x01\xab")) == "0x201 [2] 01 ab"
+    assert describe_frame(can.Message(arbitration_id=0x201, is_extended_id=True,
+                                      data=b"")) == "0x00000201 [0]"
+    assert describe_error_frame(can.Message(arbitration_id=0x0A0, is_error_frame=True)) == (
+        "no ACK on transmission, bus error"
+    )
