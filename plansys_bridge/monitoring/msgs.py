@@ -18,8 +18,7 @@ from __future__ import annotations
 
 from functools import cache
 
-from rosbags.typesys import Stores, get_types_from_msg, get_typestore
-from rosbags.typesys.store import Typestore
+from .rosbags_api import Stores, Typestore, get_types_from_msg, get_typestore
 
 ACTION_EXECUTION = "plansys2_msgs/msg/ActionExecution"
 ACTION_EXECUTION_INFO = "plansys2_msgs/msg/ActionExecutionInfo"

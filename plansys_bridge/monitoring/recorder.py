@@ -25,14 +25,11 @@ from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING, Any, Protocol
 
-import numpy as np
-from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
-from rosbags.serde import SerdeError
-
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.hub import messages as hm
 
 from . import msgs
+from .rosbags_api import SerdeError, StoragePlugin, Writer, WriterError, np
 
 if TYPE_CHECKING:
     from rosbags.interfaces import Connection

@@ -23,11 +23,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-from rosbags.highlevel import AnyReader, AnyReaderError
-from rosbags.rosbag2 import ReaderError
-from rosbags.serde import SerdeError
-
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.hub import messages as hm
 from plansys_bridge.hub.auction import ActionClient, AuctionPolicy, full_action_name
@@ -35,6 +30,7 @@ from plansys_bridge.hub.hub import Hub
 
 from . import msgs
 from .recorder import BRIDGE_PREFIX, PLAN_TOPIC, bag_topic
+from .rosbags_api import AnyReader, AnyReaderError, ReaderError, SerdeError, np
 
 log = logging.getLogger(__name__)
 
