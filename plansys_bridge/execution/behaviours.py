@@ -26,7 +26,7 @@ from py_trees.common import Status
 
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.execution.options import ExecutorOptions
-from plansys_bridge.execution.plan_graph import START, PlanGraph, Point, describe_unmet
+from plansys_bridge.execution.plan_graph import END, START, PlanGraph, Point, describe_unmet
 from plansys_bridge.execution.results import ActionRecord
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome
 from plansys_bridge.hub.hub import Hub
@@ -179,6 +179,15 @@ class PlanContext:
         self.changed = False
         """Set when a status changed since the last DOT publication."""
         self.tasks: set[asyncio.Task[Any]] = set()
+        self.dependents: list[set[int]] = [set() for _ in self.actions]
+        """For each action, the actions with a start or end wait on it."""
+        for i in range(len(self.actions)):
+            for point in (START, END):
+                for j, _ in graph.waits(i, point):
+                    self.dependents[j].add(i)
+        self.active: set[int] = {i for i in range(len(self.actions)) if not graph.waits(i, START)}
+        """Branches worth ticking: not parked waiting for a predecessor."""
+        self.unfinished = len(self.actions)
         self._deadlines: list[float] = []
         self._wake: Callable[[], None] = lambda: None
 
@@ -243,11 +252,34 @@ class PlanContext:
         if self.on_info is not None:
             self.on_info(info)
 
+    # ------------------------------------------------------------ which branches to tick
+
+    def activate(self, index: int) -> None:
+        if not self.actions[index].finished:
+            self.active.add(index)
+
+    def park(self, index: int) -> None:
+        """Stop ticking a branch until one of its predecessors moves on."""
+        self.active.discard(index)
+
+    def _moved(self, rt: ActionRuntime) -> None:
+        for i in self.dependents[rt.index]:
+            self.activate(i)
+
+    def _stop_starting(self) -> None:
+        self.draining = True
+        for rt in self.actions:
+            if not rt.finished and not rt.start_reached:
+                self.active.add(rt.index)
+
+    # ------------------------------------------------------------ reporting progress
+
     def action_started(self, rt: ActionRuntime) -> None:
         rt.start_reached = True
         rt.record.start = self.now()
         rt.record.status = ActionStatus.EXECUTING
         self.progress = self.changed = True
+        self._moved(rt)
         self.publish_info(rt)
 
     def action_ended(self, rt: ActionRuntime) -> None:
@@ -255,6 +287,7 @@ class PlanContext:
         if rt.record.end is None:
             rt.record.end = self.now()
         self.progress = self.changed = True
+        self._moved(rt)
 
     def action_executed(self, rt: ActionRuntime, outcome: ActionOutcome) -> None:
         """The performer is done (success or not); the at-end part may still wait."""
@@ -275,6 +308,9 @@ class PlanContext:
         if rt.finished:
             return
         rt.finished = True
+        self.unfinished -= 1
+        self.active.discard(rt.index)
+        self._moved(rt)
         rec = rt.record
         self.progress = self.changed = True
         if success:
@@ -293,7 +329,7 @@ class PlanContext:
         if rt.start_reached and rec.end is None:
             rec.end = self.now()
         self._rollback(rt)
-        self.draining = True
+        self._stop_starting()
         self.failures.append(f"{rt.text}: {rec.message}")
         self.publish_info(rt)
 
@@ -302,6 +338,8 @@ class PlanContext:
         if rt.finished:
             return
         rt.finished = True
+        self.unfinished -= 1
+        self.active.discard(rt.index)
         self.changed = True
         if rt.start_reached and not rt.end_reached:
             rt.record.status = ActionStatus.CANCELLED
@@ -391,6 +429,7 @@ class WaitForPredecessors(ActionBehaviour):
                     if self.point == START:
                         self.rt.skipped = True
                     return self.fail(f"predecessor {other.text} stopped before its {point}")
+                ctx.park(self.rt.index)
                 return Status.RUNNING
             self._next += 1
         return Status.SUCCESS

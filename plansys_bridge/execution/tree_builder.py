@@ -1,9 +1,13 @@
 """Compile a plan graph into one py_trees behaviour tree.
 
-The root is a ``Parallel`` (success on all) with one branch per action; the graph's
-orderings live in each branch's ``WaitForPredecessors`` behaviours, so actions run
-exactly as concurrently as their dependencies allow (no hand-made nesting of
-sequences, which is where PlanSys2 #155/#184/#331 went wrong).
+The root is a :class:`PlanRoot`, a parallel composite (success when every branch
+is done) with one branch per action; the graph's orderings live in each branch's
+``WaitForPredecessors`` behaviours, so actions run exactly as concurrently as their
+dependencies allow (no hand-made nesting of sequences, which is where PlanSys2
+#155/#184/#331 went wrong). Unlike py_trees' ``Parallel`` it ticks only branches
+that can move: a branch parked in ``WaitForPredecessors`` is ticked again only when
+one of its predecessors starts, ends or stops, so a tick costs what is running, not
+the size of the plan.
 
 Users may replace an action's subtree with a *template*: a callable that receives
 an :class:`ActionNodes` (a factory of the standard behaviours for that action) and
@@ -14,8 +18,10 @@ wrap or extend it. A template must keep the behaviours that other actions wait o
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import py_trees
-from py_trees.common import ParallelPolicy
+from py_trees.common import Status
 
 from plansys_bridge.errors import ExecutionError
 from plansys_bridge.execution.behaviours import (
@@ -34,7 +40,7 @@ from plansys_bridge.execution.behaviours import (
 from plansys_bridge.execution.plan_graph import END, START
 from plansys_bridge.knowledge.evaluation import GroundAction
 
-__all__ = ["ActionNodes", "TemplateError", "build_tree", "default_template"]
+__all__ = ["ActionNodes", "PlanRoot", "TemplateError", "build_tree", "default_template"]
 
 
 class TemplateError(ExecutionError):
@@ -124,8 +130,36 @@ def default_template(nodes: ActionNodes) -> py_trees.behaviour.Behaviour:
     return nodes.default()
 
 
-def build_tree(ctx: PlanContext) -> py_trees.composites.Parallel:
-    """One ``Parallel`` (success on all) with a wrapped branch per action."""
+class PlanRoot(py_trees.composites.Composite):
+    """Parallel root over the action branches; ticks only the active ones (see module
+    docs) and succeeds once every branch is done (a branch records its own failure)."""
+
+    def __init__(
+        self, name: str, ctx: PlanContext, children: list[py_trees.behaviour.Behaviour]
+    ) -> None:
+        super().__init__(name, children)
+        self.ctx = ctx
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        if self.status != Status.RUNNING:
+            for child in self.children:
+                if child.status != Status.INVALID:
+                    child.stop(Status.INVALID)
+            self.initialise()
+        for index in sorted(self.ctx.active):
+            child = self.children[index]
+            if child.status in (Status.SUCCESS, Status.FAILURE):
+                continue
+            yield from child.tick()
+        if self.ctx.unfinished == 0:
+            self.stop(Status.SUCCESS)
+        else:
+            self.status = Status.RUNNING
+        yield self
+
+
+def build_tree(ctx: PlanContext) -> PlanRoot:
+    """A :class:`PlanRoot` with a wrapped branch per action."""
     branches: list[py_trees.behaviour.Behaviour] = []
     for rt in ctx.actions:
         nodes = ActionNodes(ctx, rt)
@@ -134,11 +168,7 @@ def build_tree(ctx: PlanContext) -> py_trees.composites.Parallel:
         if template is not None:
             _check_template(subtree, rt)
         branches.append(ActionBranch(ctx, rt, subtree))
-    return py_trees.composites.Parallel(
-        f"plan {ctx.plan_id}/{ctx.plan_index}",
-        policy=ParallelPolicy.SuccessOnAll(synchronise=True),
-        children=branches,
-    )
+    return PlanRoot(f"plan {ctx.plan_id}/{ctx.plan_index}", ctx, branches)
 
 
 def _check_template(subtree: object, rt: ActionRuntime) -> None:
