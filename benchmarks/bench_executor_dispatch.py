@@ -152,7 +152,8 @@ def main() -> None:
     print("-" * len(header))
     for name, s in results.items():
         print(
-            f"{name:<32} {s['median_us']:>9.1f} {s['p90_us']:>9.1f} {s['p99_us']:>9.1f} {s['max_us']:>9.1f}"
+            f"{name:<32} {s['median_us']:>9.1f} {s['p90_us']:>9.1f} "
+            f"{s['p99_us']:>9.1f} {s['max_us']:>9.1f}"
         )
 
 
