@@ -259,6 +259,8 @@ class ActionPerformer(ABC):
         goal = self.goal
         if goal is None:
             raise HubError(f"performer {self.node_name}: feedback() with no goal running")
+        if self._cancelling:
+            return  # the goal was cancelled: the executor no longer listens for it
         self.completion = min(1.0, max(0.0, float(completion)))
         self._send(ExecutionType.FEEDBACK, goal, completion=self.completion, status=status)
 

@@ -262,6 +262,11 @@ class SimulatedPerformer(ActionPerformer):
             return
         super()._publish(topic, msg)
 
+    def _on_action_msg(self, msg: object) -> None:
+        if self.dead:
+            return  # a crashed node hears nothing either, CANCEL included
+        super()._on_action_msg(msg)
+
     async def stop(self) -> None:
         if self._revive_timer is not None:
             self._revive_timer.cancel()

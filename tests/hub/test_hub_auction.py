@@ -552,3 +552,37 @@ def test_auction_policy_from_config_names_the_key() -> None:
     with pytest.raises(ConfigError) as err:
         AuctionPolicy.from_config({"reauctions": True})
     assert err.value.key == "auction.reauctions"
+
+
+def test_confirm_callback_names_each_confirmed_performer(virtual_hub: Hub) -> None:
+    p1 = sim(virtual_hub, "p1", {"move": []}, durations={"move": 4.0})
+    p2 = sim(virtual_hub, "p2", {"move": []}, durations={"move": 4.0})
+    p1.die_during_next()
+    confirmed: list[tuple[float, str]] = []
+
+    async def body() -> ActionOutcome:
+        loop = asyncio.get_running_loop()
+        client = ActionClient(
+            virtual_hub, "move", ["r1"], request_id="cb", policy=AuctionPolicy(liveness_timeout=3)
+        )
+        return await client.run(confirm_cb=lambda node: confirmed.append((loop.time(), node)))
+
+    outcome = scenario(virtual_hub, body, p1, p2)
+    assert outcome.success
+    assert confirmed == [(0.0, "p1"), (4.0, "p2")]
+
+
+def test_cancel_before_run_sends_nothing(virtual_hub: Hub, hub_recorder: Any) -> None:
+    p = sim(virtual_hub, "p", {"move": []})
+
+    async def body() -> tuple[ActionOutcome, Any]:
+        rec = hub_recorder(virtual_hub)
+        client = ActionClient(virtual_hub, "move", ["r1"], request_id="early")
+        client.cancel()
+        outcome = await client.run()
+        client.cancel()  # after the end: nothing happens
+        await asyncio.sleep(1.0)
+        return outcome, rec
+
+    outcome, rec = scenario(virtual_hub, body, p)
+    assert outcome.cancelled and rec.kinds() == []

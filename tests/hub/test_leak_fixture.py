@@ -11,7 +11,7 @@ import pytest
 
 CONFTEST = Path(__file__).resolve().parents[1] / "conftest.py"
 
-LEAKY_TESTS = '''
+LEAKY_TESTS = """
 import asyncio
 import threading
 
@@ -53,7 +53,7 @@ def test_subscriber_error():
         t.publish("x", 1)
         await asyncio.sleep(0)
     run(main(), VirtualClock())
-'''
+"""
 
 
 @pytest.mark.allow_asyncio_errors  # the inner run's subscriber error is logged here too
