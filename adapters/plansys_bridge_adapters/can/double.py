@@ -17,16 +17,21 @@ with a scaled WallClock its physics run at mission speed too.
 
 from __future__ import annotations
 
+import argparse
 import asyncio
 import contextlib
 import logging
 import math
 import random
+import sys
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import can
 
-from plansys_bridge.clock import Clock
+from plansys_bridge.clock import Clock, WallClock
+from plansys_bridge.errors import AdapterError
 
 from .bus import BusConfig, CanBusClient
 from .dbc import (
@@ -251,8 +256,9 @@ class BaseDouble:
         """Put CAN error frames on the bus (as a controller reports bit/CRC errors)."""
         for _ in range(count):
             self.client.send_raw(
-                can.Message(arbitration_id=0x20000080, is_error_frame=True, dlc=8,
-                            data=bytes(8))
+                # As SocketCAN delivers it: the error class (0x080 bus error) in the ID.
+                can.Message(arbitration_id=0x080, is_extended_id=False, is_error_frame=True,
+                            dlc=8, data=bytes(8))
             )
 
     def send_garbage(self, count: int = 20, seed: int = 0) -> list[can.Message]:
@@ -400,3 +406,63 @@ class BaseDouble:
         self._send(self.status_frame())
         if not self._heartbeat_frozen:
             self._heartbeat_counter = (self._heartbeat_counter + 1) % 256
+
+
+async def serve(
+    clock: Clock,
+    bus: BusConfig,
+    config: BaseDoubleConfig,
+    dbc: MobileBaseDbc,
+    duration: float | None,
+) -> BaseDouble:
+    """Run a base double until ``duration`` (mission seconds) passes or forever."""
+    async with BaseDouble(clock, bus, config, dbc) as base:
+        if duration is None:
+            await asyncio.Event().wait()
+        else:
+            await clock.sleep(duration)
+    return base
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m plansys_bridge_adapters.can.double``: a simulated base on any python-can bus.
+
+    Useful to try the CAN performer against a virtual SocketCAN interface
+    (``ip link add dev vcan0 type vcan``) from another process, without the robot.
+    """
+    parser = argparse.ArgumentParser(
+        prog="python -m plansys_bridge_adapters.can.double",
+        description="Simulated differential-drive base speaking the mobile-base DBC.",
+    )
+    parser.add_argument("--interface", default="socketcan", help="python-can interface")
+    parser.add_argument("--channel", default="vcan0")
+    parser.add_argument("--bitrate", type=int, default=None)
+    parser.add_argument("--dbc", type=Path, default=None, help="DBC file (default: packaged)")
+    parser.add_argument("--x", type=float, default=0.0)
+    parser.add_argument("--y", type=float, default=0.0)
+    parser.add_argument("--yaw", type=float, default=0.0)
+    parser.add_argument("--watchdog-timeout", type=float, default=0.3)
+    parser.add_argument("--battery", type=float, default=95.0, help="initial percent")
+    parser.add_argument("--duration", type=float, default=None, help="seconds (default: forever)")
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    bus = BusConfig(interface=args.interface, channel=args.channel, bitrate=args.bitrate)
+    config = BaseDoubleConfig(
+        x=args.x, y=args.y, yaw=args.yaw, watchdog_timeout=args.watchdog_timeout,
+        battery_percent=args.battery,
+    )
+    try:
+        dbc = MobileBaseDbc.load(args.dbc)
+        base = asyncio.run(serve(WallClock(), bus, config, dbc, args.duration))
+    except KeyboardInterrupt:
+        return 0
+    except AdapterError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    m = base.model
+    print(f"base stopped at x={m.x:.3f} y={m.y:.3f} yaw={m.yaw:.3f}, battery {base.battery:.1f} %")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import threading
 from collections.abc import AsyncIterator, Callable, Coroutine
 from contextlib import asynccontextmanager
 from typing import Any
@@ -21,7 +22,7 @@ from plansys_bridge_adapters.can.dbc import (
     OdomTwist,
     VelocityCommand,
 )
-from plansys_bridge_adapters.can.double import BaseDouble, BaseDoubleConfig, BaseLimits
+from plansys_bridge_adapters.can.double import BaseDouble, BaseDoubleConfig, BaseLimits, main
 
 from plansys_bridge.clock import VirtualClock, run
 
@@ -269,3 +270,37 @@ def test_blocked_wheels_keep_the_base_still(channel: str) -> None:
             assert math.isclose(base.model.linear, 0.0)
 
     run_virtual(scenario)
+
+
+def test_command_line_double_serves_a_bus(channel: str, capsys: pytest.CaptureFixture[str]) -> None:
+    listener = can.Bus(interface="virtual", channel=channel)
+    results: list[int] = []
+    thread = threading.Thread(
+        target=lambda: results.append(
+            main(["--interface", "virtual", "--channel", channel, "--x", "1.5",
+                  "--duration", "0.3"])
+        ),
+        name="can-double-cli",
+    )
+    thread.start()
+    try:
+        poses: list[OdomPose] = []
+        dbc = MobileBaseDbc.load()
+        while thread.is_alive() or not poses:
+            msg = listener.recv(0.5)
+            if msg is None:
+                break
+            frame = dbc.decode(msg)
+            if isinstance(frame, OdomPose):
+                poses.append(frame)
+    finally:
+        thread.join()
+        listener.shutdown()
+    assert results == [0]
+    assert len(poses) >= 5 and poses[0] == OdomPose(1.5, 0.0, 0.0)
+    assert "base stopped at x=1.500" in capsys.readouterr().out
+
+
+def test_command_line_double_reports_a_bad_interface(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--interface", "nosuchcan", "--channel", "can9", "--duration", "0.1"]) == 1
+    assert "cannot open CAN bus nosuchcan:can9" in capsys.readouterr().err
