@@ -12,7 +12,10 @@ While it runs, the performer:
 * writes the robot position into the knowledge base, if configured (``knowledge``:
   which action argument is the robot and which PDDL functions take ``x``, ``y``,
   ``z``, ``yaw``);
-* hands every replayed message (as its ROS 2 type) to the mission recorder.
+* hands every replayed message (as its ROS 2 type) to the mission recorder;
+* publishes each replayed :class:`~.reader.PoseSample` on a hub topic, if
+  ``publish_topic`` is set, for whatever else follows the robot (a monitor, a
+  second robot's planner).
 
 It finishes when the segment ends. A configuration that points at a missing bag,
 topic or an empty window fails at start-up (``setup``), not in the middle of a run.
@@ -28,6 +31,7 @@ Mission file entry::
       rate: 1.0                         # 2.0 replays twice as fast
       publish_rate: 10.0                # feedback / knowledge / recorder updates per s
       record_topic: /tiago/odom         # bag topic for the recorder (default /<name>/pose)
+      publish_topic: tiago/pose         # also publish the replayed poses on the hub
       knowledge: {robot_argument: 0, functions: {x: robot_x, y: robot_y}}
 """
 
@@ -104,7 +108,16 @@ class BagNavigationPerformer(ActionPerformer):
     """Executes moves by replaying recorded poses from ROS 1 / ROS 2 bags."""
 
     settings_keys: ClassVar[frozenset[str]] = frozenset(
-        {"segments", "bag", "topic", "rate", "publish_rate", "record_topic", "knowledge"}
+        {
+            "segments",
+            "bag",
+            "topic",
+            "rate",
+            "publish_rate",
+            "record_topic",
+            "publish_topic",
+            "knowledge",
+        }
     )
 
     def __init__(
@@ -117,6 +130,7 @@ class BagNavigationPerformer(ActionPerformer):
         rate: float = 1.0,
         publish_rate: float = 10.0,
         record_topic: str | None = None,
+        publish_topic: str | None = None,
         knowledge: KnowledgeBinding | None = None,
         heartbeat_period: float = 1.0,
         commit_timeout: float = 2.0,
@@ -136,6 +150,7 @@ class BagNavigationPerformer(ActionPerformer):
         self.rate = float(rate)
         self.publish_period = 1.0 / float(publish_rate)
         self.record_topic = record_topic or f"/{node_name}/pose"
+        self.publish_topic = publish_topic
         self.knowledge_binding = knowledge
         self.pose: PoseSample | None = None
         """The last replayed pose (None before the first move)."""
@@ -155,7 +170,7 @@ class BagNavigationPerformer(ActionPerformer):
                 "missing: the bag segments that serve this performer's moves",
                 key=f"{key}.segments",
             )
-        for name in ("bag", "topic", "record_topic"):
+        for name in ("bag", "topic", "record_topic", "publish_topic"):
             if name in s and not isinstance(s[name], str):
                 raise ConfigError(f"expected a string, got {s[name]!r}", key=f"{key}.{name}")
         route = Route.from_config(
@@ -176,6 +191,7 @@ class BagNavigationPerformer(ActionPerformer):
             rate=rate,
             publish_rate=publish_rate,
             record_topic=s.get("record_topic"),
+            publish_topic=s.get("publish_topic"),
             knowledge=binding,
             heartbeat_period=parsed.heartbeat_period,
             commit_timeout=parsed.commit_timeout,
@@ -270,6 +286,8 @@ class BagNavigationPerformer(ActionPerformer):
         self.feedback(
             completion, f"{label}: {progress.travelled:.2f}/{progress.profile.length:.2f} m"
         )
+        if self.publish_topic:
+            self.hub.publish(self.publish_topic, sample)
         recorder = self.context.recorder
         record_cdr = getattr(recorder, "record_cdr", None)
         if record_cdr is not None and getattr(recorder, "recording", True):
