@@ -193,7 +193,7 @@ class _Experiment:
                     break
                 number += 1
                 result = await self._mission(
-                    executor, dish_order(number, self.rng, cfg.dishes_per_mission)
+                    executor, dish_order(number, self.rng, cfg.dishes_per_mission, self.robots)
                 )
                 if result is not None:
                     action_time += sum(a.execution_time for a in result.actions)

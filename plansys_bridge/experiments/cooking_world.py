@@ -10,6 +10,7 @@ the experiment, the demo mission and the tests.
 from __future__ import annotations
 
 import random
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -85,8 +86,15 @@ class DishOrder:
     goal: str
 
 
-def dish_order(number: int, rng: random.Random, dishes: int = 2) -> DishOrder:
-    """A mission of ``dishes`` random dishes, each with fresh ingredient instances."""
+def dish_order(
+    number: int, rng: random.Random, dishes: int = 2, robots: Sequence[str] = ()
+) -> DishOrder:
+    """A mission of ``dishes`` random dishes, each with fresh ingredient instances.
+
+    The goal also asks every robot in ``robots`` to end with a full battery: a robot
+    whose battery dropped is recharged as part of the next plan instead of being
+    left idle for the rest of the run.
+    """
     instances: dict[str, str] = {}
     predicates: list[str] = []
     chosen: list[tuple[str, str]] = []
@@ -102,5 +110,6 @@ def dish_order(number: int, rng: random.Random, dishes: int = 2) -> DishOrder:
             instances[name] = "ingredient"
             predicates += [f"({ipred} {name})", f"(ingredient_at {name} {zone})"]
         chosen.append((dish, kind))
-    goal = "(and " + " ".join(f"(dish_prepared {d})" for d, _ in chosen) + ")"
+    parts = [f"(dish_prepared {d})" for d, _ in chosen] + [f"(battery_full {r})" for r in robots]
+    goal = "(and " + " ".join(parts) + ")"
     return DishOrder(number, tuple(chosen), instances, predicates, goal)
