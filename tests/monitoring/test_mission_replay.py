@@ -248,3 +248,12 @@ def test_replay_plan_runs_items_at_their_planned_times(virtual_hub: Hub, tmp_pat
         [i.action for i in PLAN.items], hm.ActionStatus.SUCCEEDED
     )
     assert compare_missions(mission, RecordedMission(Path("y"), [PLAN], records)).same
+
+
+def test_planned_plan_is_the_fallback(virtual_hub: Hub, tmp_path: Path) -> None:
+    """Without an executed plan, read_mission reports the plan written by record_plan."""
+    with MissionRecorder(virtual_hub, tmp_path / "run", topics=()) as recorder:
+        recorder.record_plan(PLAN, stamp=0.0)
+    mission = read_mission(tmp_path / "run")
+    assert mission.plan == PLAN and mission.topics == {"/plan": 1}
+    assert mission.actions == [] and not mission.succeeded
