@@ -184,9 +184,9 @@ def test_plansys2_default_retries_every_second_for_thirty_seconds(
 def test_dead_performer_is_cancelled_and_the_action_re_auctioned(
     virtual_hub: Hub, hub_recorder: Any
 ) -> None:
-    p1 = sim(virtual_hub, "p1", {"move": []}, durations={"move": 4.0})
-    p2 = sim(virtual_hub, "p2", {"move": []}, durations={"move": 4.0})
-    p1.die_during_next()  # goes silent at 2 s (half the action)
+    p1 = sim(virtual_hub, "p1", {"move": []}, durations={"move": 4.2})
+    p2 = sim(virtual_hub, "p2", {"move": []}, durations={"move": 3.0})
+    p1.die_during_next()  # goes silent at 2.1 s (half the action)
     policy = AuctionPolicy(liveness_timeout=3.0)
 
     async def body() -> tuple[ActionOutcome, Any]:
@@ -204,12 +204,13 @@ def test_dead_performer_is_cancelled_and_the_action_re_auctioned(
         (0.0, CONF, "p1"),
         (0.0, REJ, "p2"),
         (1.0, FB, "p1"),
-        # p1 goes silent at 2.0 (before its 2.0 heartbeat): last sign of life at 1.0
-        (4.0, CAN, "p1"),
-        (4.0, REQ, ""),
-        (4.0, RESP, "p2"),
-        (4.0, CONF, "p2"),
-        (5.0, FB, "p2"),
+        (2.0, FB, "p1"),
+        # p1 goes silent at 2.1; its last sign of life (feedback, RUNNING heartbeat)
+        # was at 2.0, so it is declared lost at 5.0
+        (5.0, CAN, "p1"),
+        (5.0, REQ, ""),
+        (5.0, RESP, "p2"),
+        (5.0, CONF, "p2"),
         (6.0, FB, "p2"),
         (7.0, FB, "p2"),
         (8.0, FIN, "p2"),
@@ -247,8 +248,8 @@ def test_a_lost_performer_is_re_auctioned_once_then_the_action_fails(
 
 
 def test_a_lost_finish_ends_in_a_re_auction(virtual_hub: Hub, hub_recorder: Any) -> None:
-    p1 = sim(virtual_hub, "p1", {"move": []}, durations={"move": 2.0})
-    p2 = sim(virtual_hub, "p2", {"move": []}, durations={"move": 2.0})
+    p1 = sim(virtual_hub, "p1", {"move": []}, durations={"move": 2.5})
+    p2 = sim(virtual_hub, "p2", {"move": []}, durations={"move": 1.5})
     p1.lose_next_finish()
     policy = AuctionPolicy(liveness_timeout=3.0)
 
@@ -259,19 +260,20 @@ def test_a_lost_finish_ends_in_a_re_auction(virtual_hub: Hub, hub_recorder: Any)
 
     outcome, rec = scenario(virtual_hub, body, p1, p2)
     assert outcome.success and outcome.performer == "p2" and outcome.lost_performers == ("p1",)
-    # p1 finished at 2.0 without FINISH and heartbeats READY since: its last sign of
-    # life for this action was at 1.0, so it is lost at 4.0; idle again, it answers
+    # p1 finished at 2.5 without FINISH and heartbeats READY since: its last sign of
+    # life for this action was at 2.0, so it is lost at 5.0; idle again, it answers
     # the new auction but is excluded.
     assert rec.timeline()[5:] == [
         (1.0, FB, "p1"),
-        (4.0, CAN, "p1"),
-        (4.0, REQ, ""),
-        (4.0, RESP, "p1"),
-        (4.0, RESP, "p2"),
-        (4.0, REJ, "p1"),
-        (4.0, CONF, "p2"),
-        (5.0, FB, "p2"),
-        (6.0, FIN, "p2"),
+        (2.0, FB, "p1"),
+        (5.0, CAN, "p1"),
+        (5.0, REQ, ""),
+        (5.0, RESP, "p1"),
+        (5.0, RESP, "p2"),
+        (5.0, REJ, "p1"),
+        (5.0, CONF, "p2"),
+        (6.0, FB, "p2"),
+        (6.5, FIN, "p2"),
     ]
     assert p1.stats["lost_finish"] == 1
 
@@ -555,7 +557,7 @@ def test_auction_policy_from_config_names_the_key() -> None:
 
 
 def test_confirm_callback_names_each_confirmed_performer(virtual_hub: Hub) -> None:
-    p1 = sim(virtual_hub, "p1", {"move": []}, durations={"move": 4.0})
+    p1 = sim(virtual_hub, "p1", {"move": []}, durations={"move": 4.2})
     p2 = sim(virtual_hub, "p2", {"move": []}, durations={"move": 4.0})
     p1.die_during_next()
     confirmed: list[tuple[float, str]] = []
@@ -569,7 +571,7 @@ def test_confirm_callback_names_each_confirmed_performer(virtual_hub: Hub) -> No
 
     outcome = scenario(virtual_hub, body, p1, p2)
     assert outcome.success
-    assert confirmed == [(0.0, "p1"), (4.0, "p2")]
+    assert confirmed == [(0.0, "p1"), (5.0, "p2")]
 
 
 def test_cancel_before_run_sends_nothing(virtual_hub: Hub, hub_recorder: Any) -> None:

@@ -45,6 +45,17 @@ def test_allowed_thread():
     threading.Thread(target=leak_switch.release.wait, name="leaky-allowed").start()
 
 
+def test_task_exception_never_retrieved():
+    async def boom():
+        raise ValueError("nobody looked")
+
+    async def main():
+        asyncio.ensure_future(boom())
+        await asyncio.sleep(1)
+
+    run(main(), VirtualClock())
+
+
 def test_subscriber_error():
     async def main():
         t = InProcessTransport()
@@ -69,7 +80,7 @@ def test_no_leaks_fails_leaking_tests(
         result = pytester.runpytest_inprocess("-p", "no:cacheprovider", "-p", "no:timeout")
     finally:
         release.set()
-    result.assert_outcomes(passed=5, errors=3)
+    result.assert_outcomes(passed=6, errors=4)
     out = result.stdout.str()
     assert "ERROR at teardown of test_leaves_a_task" in out
     assert "asyncio tasks still pending when the loop closed" in out
@@ -77,4 +88,6 @@ def test_no_leaks_fails_leaking_tests(
     assert "leaky-worker (daemon=False)" in out
     assert "ERROR at teardown of test_subscriber_error" in out
     assert "subscriber of 'x' raised ZeroDivisionError" in out
+    assert "ERROR at teardown of test_task_exception_never_retrieved" in out
+    assert "Task exception was never retrieved" in out
     assert "test_allowed_thread" not in out.split("short test summary")[-1]
