@@ -17,6 +17,8 @@ Two readers:
 - ``poll``: a task on the event loop drains ``bus.recv(0)`` every ``poll_period``.
   No threads, so it runs in virtual time (the project's VirtualClock) and tests are
   deterministic; the cost is up to ``poll_period`` of added latency.
+- ``manual``: no reader; the owner calls :meth:`CanBusClient.drain` from its own
+  loop (the base double does, once per physics step, like a controller's main loop).
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ from .dbc import Frame, MalformedFrame, MobileBaseDbc
 
 _LOG = logging.getLogger(__name__)
 
-ReaderKind = Literal["auto", "notifier", "poll"]
+ReaderKind = Literal["auto", "notifier", "poll", "manual"]
 
 
 class BusOpenError(AdapterError):
@@ -56,7 +58,7 @@ class BusConfig:
     channel: str = "plansys_can0"
     bitrate: int | None = None
     reader: ReaderKind = "auto"
-    poll_period: float = 0.002
+    poll_period: float = 0.005
     send_timeout: float = 0.05
     options: Mapping[str, Any] = field(default_factory=dict)
     """Extra keyword arguments for :class:`can.Bus` (e.g. ``fd``, ``receive_own_messages``)."""
@@ -160,8 +162,8 @@ class CanBusClient:
             self._reader = _LoopReader()
             self._notifier = can.Notifier(bus, [self._reader], timeout=0.1, loop=loop)
             self._task = loop.create_task(self._pump_notifier(self._reader))
-        else:
-            self._task = loop.create_task(self._poll(bus))
+        elif kind == "poll":
+            self._task = loop.create_task(self._poll())
 
     async def close(self) -> None:
         """Stop reading and shut the interface down; safe to call twice."""
@@ -249,18 +251,30 @@ class CanBusClient:
             assert isinstance(item, can.Message)
             self._dispatch_safely(item)
 
-    async def _poll(self, bus: can.BusABC) -> None:
+    def drain(self, max_frames: int = 256) -> int:
+        """Handle what is queued now, up to ``max_frames``; returns how many frames.
+
+        A driver error goes to the listener's ``on_bus_error`` and ends the drain.
+        """
+        bus = self._bus
+        if bus is None:
+            return 0
+        handled = 0
+        try:
+            while handled < max_frames:
+                msg = bus.recv(0)
+                if msg is None:
+                    break
+                handled += 1
+                self._dispatch_safely(msg)
+        except can.CanError as exc:
+            self._bus_failed(exc)
+        return handled
+
+    async def _poll(self) -> None:
         period = self.config.poll_period
         while not self._closing:
-            try:
-                # Drain what is queued, but yield after a burst so a flood cannot starve the loop.
-                for _ in range(256):
-                    msg = bus.recv(0)
-                    if msg is None:
-                        break
-                    self._dispatch_safely(msg)
-            except can.CanError as exc:
-                self._bus_failed(exc)
-                await asyncio.sleep(max(period, 0.1))
-                continue
-            await asyncio.sleep(period)
+            errors = self.counters.bus_errors
+            self.drain()
+            # After a driver error, back off instead of spinning on a dead interface.
+            await asyncio.sleep(max(period, 0.1) if self.counters.bus_errors > errors else period)

@@ -163,7 +163,7 @@ class BaseDouble:
     # -- lifecycle -------------------------------------------------------------
 
     async def start(self) -> None:
-        await self.client.open(reader="poll")
+        await self.client.open(reader="manual")
         self._task = asyncio.get_running_loop().create_task(self._run())
 
     async def stop(self) -> None:
@@ -348,17 +348,19 @@ class BaseDouble:
         next_status = last
         while True:
             await self.clock.sleep(physics_period)
+            self.client.drain()
             now = self.clock.now()
             self._physics(now, now - last)
             last = now
             if self._silent_until is not None and now >= self._silent_until:
                 self._silent_until = None
             transmitting = self._silent_until is None
-            if now >= next_odom:
+            # A microsecond of slack: float sums of periods must not skip a physics step.
+            if now >= next_odom - 1e-6:
                 next_odom = max(next_odom + odom_period, now - odom_period)
                 if transmitting:
                     self._send_odometry()
-            if now >= next_status:
+            if now >= next_status - 1e-6:
                 next_status = max(next_status + status_period, now - status_period)
                 if transmitting:
                     self._send_status()

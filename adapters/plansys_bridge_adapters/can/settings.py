@@ -364,7 +364,7 @@ def parse_bus(value: object, key: str) -> BusConfig:
         raise ConfigError(f"must be a mapping, got {options!r}", key=f"{key}.options")
     timing = {
         name: _positive(value.get(name, default), f"{key}.{name}")
-        for name, default in (("poll_period", 0.002), ("send_timeout", 0.05))
+        for name, default in (("poll_period", 0.005), ("send_timeout", 0.05))
     }
     return BusConfig(
         interface=interface,
