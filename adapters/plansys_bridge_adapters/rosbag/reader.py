@@ -27,6 +27,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING, Any
 
+from rosbags.convert.converter import is_same_wireformat
 from rosbags.highlevel import AnyReader, AnyReaderError
 from rosbags.rosbag1 import ReaderError as Ros1ReaderError
 from rosbags.rosbag2 import ReaderError as Ros2ReaderError
@@ -249,6 +250,8 @@ class BagReader:
             )
         reader = self.reader
         ros1 = self.is_ros1
+        if ros1:
+            self._check_convertible(topic, msgtype)
         last: int | None = None
         it = reader.messages(conns, start=start_ns, stop=stop_ns)
         while True:
@@ -272,6 +275,23 @@ class BagReader:
                 ) from exc
             last = timestamp
             yield RawMessage(topic, msgtype, timestamp, cdr)
+
+    def _check_convertible(self, topic: str, msgtype: str) -> None:
+        """A ROS 1 definition must have the ROS 2 type's layout (bar the header's seq)."""
+        try:
+            same = is_same_wireformat(self.reader.typestore, ros2_typestore(), msgtype, msgtype)
+        except KeyError as exc:
+            same = False
+            detail = f" (no definition of {exc})"
+        else:
+            detail = ""
+        if not same:
+            raise BagTypeError(
+                f"the bag's ROS 1 definition of {msgtype} differs from ROS 2 Humble's{detail}; "
+                "it cannot be converted",
+                self.path,
+                topic,
+            )
 
     def poses(
         self, topic: str, start_ns: int | None = None, stop_ns: int | None = None

@@ -25,6 +25,7 @@ from plansys_bridge_adapters.rosbag.reader import (
 )
 from rosbag_testdata import AMR_LOCATION, ARDRONE, DEMO_BAGS, HUSKY, NAV2_AMCL, NAV2_ODOM
 from rosbags.highlevel import AnyReader
+from rosbags.rosbag1 import Writer as Writer1
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
@@ -229,3 +230,26 @@ def test_reading_streams_instead_of_loading(tmp_path: Path) -> None:
         shutil.rmtree(path)
     assert n == count
     assert peak < total / 4, f"peak {peak / 1e6:.1f} MB for {total / 1e6:.1f} MB of messages"
+
+
+def test_ros1_definition_that_differs_from_ros2_is_refused(tmp_path: Path) -> None:
+    """A ROS 1 bag whose PoseStamped is not the standard one cannot be converted."""
+    store = get_typestore(Stores.EMPTY)
+    store.register(
+        get_types_from_msg("uint32 seq\ntime stamp\nstring frame_id\n", "std_msgs/msg/Header")
+    )
+    store.register(
+        get_types_from_msg("std_msgs/Header header\nfloat64 x\nfloat64 y\n", POSE_STAMPED)
+    )
+    types = store.types
+    path = tmp_path / "odd.bag"
+    with Writer1(path) as writer:
+        conn = writer.add_connection("/pose", POSE_STAMPED, typestore=store)
+        header = types["std_msgs/msg/Header"](
+            seq=1, stamp=types["builtin_interfaces/msg/Time"](sec=1, nanosec=0), frame_id="m"
+        )
+        msg = types[POSE_STAMPED](header=header, x=1.0, y=2.0)
+        writer.write(conn, 1000, store.serialize_ros1(msg, POSE_STAMPED))
+    with pytest.raises(BagTypeError, match="differs from ROS 2 Humble's") as err:
+        list(read_poses(path, "/pose"))
+    assert err.value.topic == "/pose" and str(path) in str(err.value)
