@@ -15,14 +15,16 @@ from plansys_bridge_adapters.rosbag.errors import BagCorruptError, BagTopicError
 from plansys_bridge_adapters.rosbag.performer import BagNavigationPerformer
 from plansys_bridge_adapters.rosbag.reader import POSE_STAMPED, BagReader, PoseSample
 from plansys_bridge_adapters.rosbag.route import Segment
-from rosbag_testdata import ARDRONE, HUSKY, NAV2_AMCL, NAV2_ODOM
+from rosbag_testdata import ARDRONE, HUSKY, NAV2_AMCL, NAV2_ODOM, REPO
 from rosbags.highlevel import AnyReader
 
 from plansys_bridge.clock import run
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome, AuctionPolicy
 from plansys_bridge.hub.hub import Hub
+from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.monitoring.recorder import MissionRecorder
+from plansys_bridge.pddl.parser import parse_domain_files
 from plansys_bridge.performers.base import ActionGoal, PerformerContext
 from plansys_bridge.performers.registry import load_performer_kind
 
@@ -295,5 +297,59 @@ def test_replayed_poses_are_published_on_the_hub(virtual_hub: Hub, demo_bags: Pa
         assert len(received) == len(feedback)
         assert (received[0].x, received[0].y) == pytest.approx((1.0, 6.5))
         assert (received[-1].x, received[-1].y) == pytest.approx((0.0, 0.0))
+
+    run(main(), virtual_hub.clock)
+
+
+def _flat_knowledge() -> ProblemExpert:
+    domain = parse_domain_files([REPO / "configs" / "pddl" / "flat_navigation.pddl"])
+    knowledge = ProblemExpert(domain)
+    knowledge.add_instance("tiago", "robot")
+    knowledge.set_function("(= (robot_x tiago) 0)")
+    return knowledge
+
+
+def test_pose_goes_into_the_knowledge(virtual_hub: Hub, demo_bags: Path) -> None:
+    knowledge = _flat_knowledge()
+    seen: list[tuple[float, float | None, float | None]] = []
+    knowledge.subscribe(
+        lambda _c: seen.append(
+            (
+                virtual_hub.clock.now(),
+                knowledge.get_function("robot_x", ("tiago",)),
+                knowledge.get_function("robot_y", ("tiago",)),
+            )
+        )
+    )
+    binding = {"functions": {"x": "robot_x", "y": "robot_y"}, "period": 2.0}
+
+    async def main() -> None:
+        performer = _performer(virtual_hub, demo_bags, knowledge=binding)
+        performer.context.knowledge = knowledge
+        async with performer:
+            outcome, _, _ = await _move(virtual_hub, "tiago", "kitchen", "livingroom")
+        assert outcome.success
+
+    run(main(), virtual_hub.clock)
+    # one update (both functions in one transaction) every 2 s, and the final pose
+    assert [round(t, 3) for t, _, _ in seen] == [0.0, 2.0, 4.0, 6.0, 8.0, 10.0, 12.0]
+    assert seen[-1][1:] == pytest.approx((6.0, 0.5))
+    assert seen[3][1] == pytest.approx(3.0, abs=0.2)  # at the door halfway
+
+
+def test_unknown_knowledge_function_fails_the_action(virtual_hub: Hub, demo_bags: Path) -> None:
+    knowledge = _flat_knowledge()
+    binding = {"functions": {"x": "robot_x", "yaw": "heading"}}
+
+    async def main() -> None:
+        performer = _performer(virtual_hub, demo_bags, knowledge=binding)
+        performer.context.knowledge = knowledge
+        async with performer:
+            outcome, _, _ = await _move(virtual_hub, "tiago", "kitchen", "livingroom")
+        assert not outcome.success
+        assert "cannot write the pose into the knowledge" in outcome.status
+        assert "heading" in outcome.status
+        # all-or-nothing: robot_x was not changed either
+        assert knowledge.get_function("robot_x", ("tiago",)) == 0.0
 
     run(main(), virtual_hub.clock)
