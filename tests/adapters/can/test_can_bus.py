@@ -7,6 +7,8 @@ import logging
 
 import can
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from plansys_bridge_adapters.can.bus import (
     BusConfig,
     BusOpenError,
@@ -15,7 +17,7 @@ from plansys_bridge_adapters.can.bus import (
     describe_frame,
 )
 from plansys_bridge_adapters.can.dbc import Frame, MobileBaseDbc, OdomPose, OdomTwist
-from plansys_bridge_adapters.can.monitor import describe_error_frame
+from plansys_bridge_adapters.can.monitor import BaseMonitor, describe_error_frame
 
 from plansys_bridge.clock import VirtualClock, WallClock, run
 
@@ -155,3 +157,34 @@ def test_frames_are_described_for_logs() -> None:
     assert describe_error_frame(can.Message(arbitration_id=0x0A0, is_error_frame=True)) == (
         "no ACK on transmission, bus error"
     )
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.lists(
+        st.tuples(
+            st.sampled_from([0x010, 0x100, 0x200, 0x201, 0x300, 0x080, 0x7FF]),
+            st.binary(max_size=8),
+            st.booleans(),
+            st.sampled_from(["data", "remote", "error"]),
+        ),
+        max_size=30,
+    )
+)
+def test_any_frames_only_count_or_update_the_monitor(
+    frames: list[tuple[int, bytes, bool, str]],
+) -> None:
+    """Whatever arrives, the adapter's monitor never raises and counts add up."""
+    monitor = BaseMonitor(VirtualClock(), "virtual:fuzz")
+    client = CanBusClient(BusConfig(channel="fuzz"), DBC, monitor)
+    for frame_id, data, extended, kind in frames:
+        msg = can.Message(
+            arbitration_id=frame_id, is_extended_id=extended, data=data,
+            is_remote_frame=kind == "remote", is_error_frame=kind == "error",
+            dlc=len(data),
+        )
+        client.dispatch(msg)
+    counters = client.counters
+    assert counters.received == len(frames)
+    assert counters.decoded + counters.error_frames + counters.malformed_total == len(frames)
+    assert monitor.error_frames == counters.error_frames
