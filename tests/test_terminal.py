@@ -297,3 +297,47 @@ def test_cli_sources_then_reads_stdin() -> None:
     args = _cli_args(str(domain), "--problem", str(problem))
     assert terminal_cmd.run(args, stdin=io.StringIO("get problem predicates\n"), stdout=out) == 0
     assert "(robot_at leia kitchen)" in out.getvalue()
+
+
+MISSION = """
+name: terminal_mission
+domain: {domain}
+knowledge:
+  instances: {{leia: robot, entrance: room, dinning: room, kitchen: room, chargingroom: room}}
+  predicates:
+    - (connected entrance dinning)
+    - (connected dinning kitchen)
+    - (connected kitchen chargingroom)
+    - (connected chargingroom kitchen)
+    - (charging_point_at chargingroom)
+    - (battery_low leia)
+    - (robot_at leia entrance)
+goal: (and (robot_at leia kitchen))
+performers:
+  - kind: simulated
+    name: leia_base
+    actions: {{move: [leia], askcharge: [leia], charge: [leia]}}
+    durations: {{move: 5, askcharge: 5, charge: 5}}
+clock: {{kind: virtual}}
+"""
+
+
+def test_cli_mission_runs_plans_with_its_performers(tmp_path: Path) -> None:
+    """``--mission``: the real executor and simulated performers on the virtual clock."""
+    mission = tmp_path / "mission.yaml"
+    mission.write_text(MISSION.format(domain=SIMPLE_DOMAIN))
+    out = io.StringIO()
+    commands = "check actors\nrun\nget problem predicates\nrun action (move leia kitchen dinning)\n"
+    code = terminal_cmd.run(_cli_args("--mission", str(mission)), io.StringIO(commands), out)
+    text = out.getvalue()
+    assert code == 1, text  # the last action has no (connected kitchen dinning)
+    assert "Actors: 1\n\tleia_base" in text
+    assert "succeeded\n  SUCCEEDED (askcharge leia entrance chargingroom)" in text
+    assert "(robot_at leia kitchen)" in text and "(battery_full leia)" in text
+    last = text.split("(robot_at leia kitchen)\n")[-1]
+    assert last.startswith("error: execution rejected: ")
+    assert "(move leia kitchen dinning)" in last and "(connected kitchen dinning)" in last
+
+
+def test_cli_needs_domain_or_mission() -> None:
+    assert terminal_cmd.run(_cli_args(), io.StringIO(""), io.StringIO()) == 2

@@ -1,7 +1,11 @@
-"""``plansys-bridge terminal DOMAIN... [--problem P] [--source FILE]``: PlanSys2's terminal.
+"""``plansys-bridge terminal DOMAIN... [--problem P] [--source FILE] [--mission M]``.
 
-Loads the (merged) domain and optionally a problem, runs the commands of
-``--source`` files, then reads commands from stdin until ``quit`` or end of input.
+PlanSys2's terminal. Loads the (merged) domain and optionally a problem, runs the
+commands of ``--source`` files, then reads commands from stdin until ``quit`` or
+end of input. With ``--mission M.yaml`` the domain, the initial knowledge and the
+performers come from a mission file, and ``run`` executes plans with those
+performers (each ``run`` starts them, executes, and stops them; the mission's
+timed events are not replayed). Without a mission the terminal plans but does not run.
 With stdin not a terminal (a pipe, a file, CI) no prompt is printed, so
 ``plansys-bridge terminal d.pddl < commands`` gives clean output. Exit status: 0,
 or 1 when a command failed in a non-interactive session, 2 for bad input files.
@@ -11,11 +15,18 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
+
+if TYPE_CHECKING:
+    from plansys_bridge.knowledge.problem_expert import ProblemExpert
+    from plansys_bridge.mission_config import MissionConfig
+    from plansys_bridge.planning.plan import Plan
 
 EXIT_OK = 0
 EXIT_COMMAND_FAILED = 1
+EXIT_BAD_INPUT = 2
 
 
 def register(subparsers: Any) -> None:
@@ -28,7 +39,10 @@ def register(subparsers: Any) -> None:
             "run; source FILE; help; quit."
         ),
     )
-    parser.add_argument("domains", nargs="+", metavar="DOMAIN", help="domain file(s)")
+    parser.add_argument("domains", nargs="*", metavar="DOMAIN", help="domain file(s)")
+    parser.add_argument(
+        "--mission", metavar="YAML", help="take domain, knowledge and performers from a mission"
+    )
     parser.add_argument("--problem", metavar="FILE", help="load this problem first")
     parser.add_argument(
         "--source",
@@ -66,18 +80,44 @@ def run(args: argparse.Namespace, stdin: TextIO | None = None, stdout: TextIO | 
 
     inp = stdin if stdin is not None else sys.stdin
     out = _ErrorCounter(stdout if stdout is not None else sys.stdout)
-    domain_expert = DomainExpert.from_files(args.domains)
-    problem_expert = ProblemExpert(domain_expert)
-    if args.problem:
-        path = Path(args.problem)
-        problem_expert.load_problem(path.read_text(encoding="utf-8"), filename=str(path))
+    if bool(args.domains) == bool(args.mission):
+        print("error: give either DOMAIN file(s) or --mission", file=sys.stderr)
+        return EXIT_BAD_INPUT
 
     def planner() -> Any:
         from plansys_bridge.planning.planner import Planner
 
         return Planner(solvers=args.solver, timeout=args.timeout)
 
-    terminal = Terminal(domain_expert, problem_expert, planner_factory=planner, out=out)  # type: ignore[arg-type]
+    executor: Callable[[Plan], object] | None = None
+    actors: Callable[[], list[str]] | None = None
+    if args.mission:
+        from plansys_bridge.mission import build_knowledge
+        from plansys_bridge.mission_config import load_mission
+
+        mission = load_mission(args.mission)
+        problem_expert = build_knowledge(
+            mission, DomainExpert.from_files(list(mission.domain_paths)).domain
+        )
+        domain_expert = problem_expert.domain_expert
+        executor = mission_executor(mission, problem_expert, planner)
+        names = [p.name for p in mission.performers]
+        actors = lambda: names  # noqa: E731
+    else:
+        domain_expert = DomainExpert.from_files(args.domains)
+        problem_expert = ProblemExpert(domain_expert)
+    if args.problem:
+        path = Path(args.problem)
+        problem_expert.load_problem(path.read_text(encoding="utf-8"), filename=str(path))
+
+    terminal = Terminal(
+        domain_expert,
+        problem_expert,
+        planner_factory=planner,
+        executor_factory=executor,
+        out=out,  # type: ignore[arg-type]
+        actors=actors,
+    )
     for file in args.source or ():
         result = terminal.source(file)
         if result:
@@ -86,3 +126,33 @@ def run(args: argparse.Namespace, stdin: TextIO | None = None, stdout: TextIO | 
         terminal.repl(inp)
     interactive = inp.isatty()
     return EXIT_COMMAND_FAILED if out.errors and not interactive else EXIT_OK
+
+
+def mission_executor(
+    mission: MissionConfig, knowledge: ProblemExpert, planner: Callable[[], Any]
+) -> Callable[[Plan], str]:
+    """An executor factory running plans with the mission's performers and clock."""
+    from plansys_bridge.clock import run as run_on_clock
+    from plansys_bridge.execution.executor import Executor
+    from plansys_bridge.mission import MissionSession, executor_options, make_clock
+
+    quiet = mission.model_copy(update={"events": []})
+
+    def execute(plan: Plan) -> str:
+        clock = make_clock(quiet)
+
+        async def go() -> Any:
+            async with MissionSession(quiet, knowledge.domain, knowledge, clock) as session:
+                executor = Executor(
+                    session.hub, knowledge.domain, knowledge, planner(), executor_options(quiet)
+                )
+                return await executor.execute(plan, goal=knowledge.get_goal())
+
+        result = run_on_clock(go(), clock)
+        headline = f"{result.status}: {result.message}".rstrip(": ")
+        # a failed execution reads as an error, so scripts see it in the exit status
+        lines = [headline if result.success else f"error: execution {headline}"]
+        lines += [f"  {a.status.name:<9} {a.text}" for a in result.actions]
+        return "\n".join(lines)
+
+    return execute
