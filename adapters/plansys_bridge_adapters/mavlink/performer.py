@@ -197,6 +197,7 @@ class MavlinkPerformer(ActionPerformer):
     # -------------------------------------------------------------- execution
     async def execute(self, goal: ActionGoal) -> str | None:
         cmd = self.commands[goal.action]
+        self._last_feedback = -1e9
         vehicle = await self._link()
         vehicle.expected_modes = frozenset()
         vehicle.expect_armed = False

@@ -439,27 +439,24 @@ class MavlinkVehicle:
             remaining = deadline - loop.time()
             if remaining <= 0:
                 raise LinkError(self.url, f"timed out after {timeout:g} s waiting for {what}")
-            fut: asyncio.Future[None] = loop.create_future()
-            self._waiters.add(fut)
-            try:
-                await asyncio.wait_for(fut, min(remaining, 0.25))
-            except TimeoutError:
-                pass
-            finally:
-                self._waiters.discard(fut)
+            await self._next_message(min(remaining, 0.25))
 
     async def wait_message(self, timeout: float) -> None:
         """Return at the next message from the vehicle or after ``timeout``."""
         if self._link_error is not None:
             raise LinkError(self.url, self._link_error)
+        await self._next_message(timeout)
+
+    async def _next_message(self, timeout: float) -> None:
+        # asyncio.wait, not wait_for: on Python 3.11 wait_for swallows a cancel that
+        # arrives together with the message, and a supervised action would not stop.
         fut: asyncio.Future[None] = asyncio.get_running_loop().create_future()
         self._waiters.add(fut)
         try:
-            await asyncio.wait_for(fut, timeout)
-        except TimeoutError:
-            pass
+            await asyncio.wait({fut}, timeout=timeout)
         finally:
             self._waiters.discard(fut)
+            fut.cancel()
 
     # ------------------------------------------------------------ sending
     def _send(self, fn_name: str, *args: Any) -> None:
@@ -495,7 +492,8 @@ class MavlinkVehicle:
             try:
                 self._send("command_long_send", self.target_system, self.target_component,
                            command, attempt, *p)
-                result = await asyncio.wait_for(fut, self.settings.command_timeout)
+                async with asyncio.timeout(self.settings.command_timeout):
+                    result = await fut
                 break
             except TimeoutError:
                 if self._link_error is not None:

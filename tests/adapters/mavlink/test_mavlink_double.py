@@ -1,0 +1,183 @@
+"""The vehicle double behaves like ArduPilot SITL where a ground station can tell."""
+
+from __future__ import annotations
+
+import socket
+import subprocess
+import sys
+import time
+from typing import Any
+
+import pytest
+from plansys_bridge_adapters.mavlink.double import SimParams, VehicleDouble, VehicleSim
+from plansys_bridge_adapters.mavlink.modes import COPTER_MODES
+from pymavlink.dialects.v20 import ardupilotmega as ml
+
+
+class RawClient:
+    """A bare TCP MAVLink client: what a GCS sees, with no client-side cleverness."""
+
+    def __init__(self, url: str) -> None:
+        _, host, port = url.split(":")
+        self.sock = socket.create_connection((host, int(port)), timeout=2)
+        self.sock.settimeout(0.05)
+        self.mav = ml.MAVLink(self, srcSystem=255, srcComponent=190)
+        self.parser = ml.MAVLink(None)
+        self.seen: list[Any] = []
+
+    def write(self, data: bytes) -> None:
+        self.sock.sendall(data)
+
+    def pump(self, seconds: float) -> list[Any]:
+        end = time.monotonic() + seconds
+        got: list[Any] = []
+        while time.monotonic() < end:
+            try:
+                data = self.sock.recv(65535)
+            except TimeoutError:
+                continue
+            got.extend(self.parser.parse_buffer(data) or [])
+        self.seen.extend(got)
+        return got
+
+    def until(self, predicate: Any, seconds: float = 3.0) -> Any:
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            for msg in self.pump(0.02):
+                if predicate(msg):
+                    return msg
+        raise AssertionError("expected message never came")
+
+    def command(self, cmd: int, *params: float) -> int:
+        p = list(params) + [0.0] * (7 - len(params))
+        self.mav.command_long_send(1, 1, cmd, 0, *p)
+        ack = self.until(lambda m: m.get_type() == "COMMAND_ACK" and m.command == cmd)
+        return int(ack.result)
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+def test_time_starts_only_when_a_client_connects() -> None:
+    with VehicleDouble("copter", speedup=50) as double:
+        time.sleep(0.1)
+        assert double.state()["time"] == 0.0
+        client = RawClient(double.url)
+        try:
+            hb = client.until(lambda m: m.get_type() == "HEARTBEAT")
+            assert (hb.type, hb.autopilot) == (2, 3)
+            assert double.state()["time"] > 0.0
+        finally:
+            client.close()
+
+
+def test_rover_heartbeat_and_modes() -> None:
+    with VehicleDouble("rover", speedup=50) as double:
+        client = RawClient(double.url)
+        try:
+            hb = client.until(lambda m: m.get_type() == "HEARTBEAT")
+            assert hb.type == 10
+            assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, 15) == ml.MAV_RESULT_ACCEPTED
+            client.until(lambda m: m.get_type() == "HEARTBEAT" and m.custom_mode == 15)
+            # 6 is FOLLOW on a rover but 9 (LAND) does not exist there
+            assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, 9) == ml.MAV_RESULT_UNSUPPORTED
+        finally:
+            client.close()
+
+
+def test_telemetry_only_when_requested() -> None:
+    with VehicleDouble("copter", speedup=50) as double:
+        client = RawClient(double.url)
+        try:
+            kinds = {m.get_type() for m in client.pump(0.3)}
+            assert "HEARTBEAT" in kinds
+            assert not kinds & {"GLOBAL_POSITION_INT", "SYS_STATUS", "EKF_STATUS_REPORT"}
+            assert client.command(
+                ml.MAV_CMD_SET_MESSAGE_INTERVAL, ml.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 100_000
+            ) == ml.MAV_RESULT_ACCEPTED
+            kinds = {m.get_type() for m in client.pump(0.3)}
+            assert "GLOBAL_POSITION_INT" in kinds
+            assert "SYS_STATUS" not in kinds
+            assert client.command(
+                ml.MAV_CMD_SET_MESSAGE_INTERVAL, ml.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, -1
+            ) == ml.MAV_RESULT_ACCEPTED
+            client.pump(0.05)
+            assert "GLOBAL_POSITION_INT" not in {m.get_type() for m in client.pump(0.3)}
+        finally:
+            client.close()
+
+
+def test_arming_refused_until_ekf_then_auto_disarm() -> None:
+    with VehicleDouble("copter", speedup=50, ekf_delay=20.0) as double:
+        client = RawClient(double.url)
+        try:
+            assert client.command(ml.MAV_CMD_SET_MESSAGE_INTERVAL,
+                                  ml.MAVLINK_MSG_ID_EKF_STATUS_REPORT, 200_000) == 0
+            client.until(lambda m: m.get_type() == "HEARTBEAT")
+            assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, COPTER_MODES["GUIDED"]) == 0
+            assert client.command(ml.MAV_CMD_COMPONENT_ARM_DISARM, 1) == ml.MAV_RESULT_FAILED
+            texts = [m.text for m in client.seen if m.get_type() == "STATUSTEXT"]
+            assert "PreArm: Need Position Estimate" in texts
+            ekf = client.until(lambda m: m.get_type() == "EKF_STATUS_REPORT"
+                               and m.flags & ml.EKF_POS_HORIZ_ABS, seconds=3)
+            assert not ekf.flags & ml.EKF_CONST_POS_MODE
+            assert client.command(ml.MAV_CMD_COMPONENT_ARM_DISARM, 1) == ml.MAV_RESULT_ACCEPTED
+            client.until(lambda m: m.get_type() == "HEARTBEAT"
+                         and m.base_mode & ml.MAV_MODE_FLAG_SAFETY_ARMED)
+            # idle on the ground: DISARM_DELAY (10 s simulated) later it disarms itself
+            client.until(lambda m: m.get_type() == "HEARTBEAT"
+                         and not m.base_mode & ml.MAV_MODE_FLAG_SAFETY_ARMED, seconds=3)
+            assert double.state()["time"] >= 30.0
+        finally:
+            client.close()
+
+
+def test_takeoff_needs_arming_and_guided() -> None:
+    sim = VehicleSim(SimParams(model="copter", ekf_delay=0.5))
+    sim.connect()
+    sim.step(1.0)
+    sim._command(ml.MAV_CMD_NAV_TAKEOFF, (0, 0, 0, 0, 0, 0, 10.0))
+    assert sim.landed and not sim.armed
+    sim._command(ml.MAV_CMD_DO_SET_MODE, (1, COPTER_MODES["GUIDED"], 0, 0, 0, 0, 0))
+    sim._command(ml.MAV_CMD_COMPONENT_ARM_DISARM, (1, 0, 0, 0, 0, 0, 0))
+    sim._command(ml.MAV_CMD_NAV_TAKEOFF, (0, 0, 0, 0, 0, 0, 10.0))
+    for _ in range(200):
+        sim.step(0.05)
+    assert sim.alt == pytest.approx(10.0)
+    sim.inject_failsafe("Radio")
+    assert sim.mode_name == "RTL"
+    for _ in range(2000):
+        sim.step(0.05)
+    assert sim.landed and not sim.armed
+
+
+def test_command_line_serves_a_vehicle() -> None:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "plansys_bridge_adapters.mavlink.double", "--model", "rover",
+         "--port", str(port), "--speedup", "10"],
+        stdout=subprocess.PIPE, text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        assert f"tcp:127.0.0.1:{port}" in line
+        client = RawClient(f"tcp:127.0.0.1:{port}")
+        try:
+            assert client.until(lambda m: m.get_type() == "HEARTBEAT").type == 10
+        finally:
+            client.close()
+    finally:
+        proc.terminate()
+        assert proc.wait(timeout=5) == 0
+        if proc.stdout is not None:
+            proc.stdout.close()
+
+
+def test_bad_double_settings_are_refused() -> None:
+    with pytest.raises(ValueError, match="model"):
+        VehicleDouble("plane")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="speedup"):
+        VehicleDouble("copter", speedup=0)
