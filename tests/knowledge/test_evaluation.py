@@ -372,3 +372,30 @@ def test_exists_after_an_atom_in_a_conjunction(ev: Evaluator) -> None:
     s2 = world("(link hall lab)", "(lit roof)")
     assert not ev.holds(d, s2)
     assert ev.holds(d, s2.with_changes(adds=[Atom("at", ("r2", "hall"))]))
+
+
+@pytest.mark.parametrize(
+    ("text", "value", "expected"),
+    [
+        # PlanSys2's utils_test expression cases
+        ("(>= (moves) 3.0)", 2.9999, False),
+        ("(>= (moves) 3.0)", 4.0, True),
+        ("(>= (moves) 3.0)", 3.0, True),
+        ("(> (moves) 3.0)", 3.0, False),
+        ("(> (moves) 3.0)", 3.00001, True),
+        ("(<= (moves) -3.0)", -2.9999, False),
+        ("(<= (moves) -3.0)", -4.0, True),
+        ("(<= (moves) -3.0)", -3.0, True),
+        ("(< (moves) -3.0)", -3.0, False),
+        ("(< (moves) -3.0)", -3.00001, True),
+        ("(= (* (moves) 3.0) 9)", 3.0, True),
+        ("(= (* (moves) 3.0) -0.003)", -0.001, True),
+        ("(= (/ (moves) 3.0) -3)", -9.0, True),
+        ("(= (+ (moves) 0.1) 0.3)", 0.2, True),  # float rounding does not break equality
+    ],
+)
+def test_numeric_expressions_like_plansys2(
+    ev: Evaluator, text: str, value: float, expected: bool
+) -> None:
+    s = world(fluents={("moves", ()): value})
+    assert ev.holds(cond(ev, text), s) is expected
