@@ -81,7 +81,7 @@ def test_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert run([str(tmp_path / "d.pddl"), str(tmp_path / "missing.pddl")]) == 2
     assert "cannot read problem file" in capsys.readouterr().err
     (tmp_path / "p.pddl").write_text(tasks.CLASSICAL_PROBLEM.replace("(at r1 a)", "(at r1 zz)"))
-    with pytest.raises(PddlError, match="p.pddl:4"):
+    with pytest.raises(PddlError, match=r"p\.pddl:4"):
         run([str(tmp_path / "d.pddl"), str(tmp_path / "p.pddl")])
     (tmp_path / "p.pddl").write_text(tasks.CLASSICAL_PROBLEM)
     assert run([str(tmp_path / "d.pddl"), str(tmp_path / "p.pddl"), "--timeout", "-1"]) == 2

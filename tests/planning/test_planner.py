@@ -54,7 +54,7 @@ def test_no_solver_fits() -> None:
 
 
 def test_unknown_solver() -> None:
-    with pytest.raises(PluginError, match="unknown solver 'nope'.*kairos"):
+    with pytest.raises(PluginError, match=r"unknown solver 'nope'.*kairos"):
         Planner(["nope"])
 
 
