@@ -80,13 +80,13 @@ def test_recorded_mission_opens_with_rosbags_and_mcap(
     assert types["/tiago_nav/pose"] == "nav_msgs/msg/Odometry"
     [mcap_file] = bag.glob("*.mcap")
     with mcap_file.open("rb") as f:
-        reader = make_reader(f)
-        summary = reader.get_summary()
+        mcap_reader = make_reader(f)
+        summary = mcap_reader.get_summary()
         assert summary is not None
         schemas = {summary.schemas[c.schema_id].name for c in summary.channels.values()}
         assert {"plansys2_msgs/msg/ActionExecution", "plansys2_msgs/msg/Knowledge"} <= schemas
         assert all(c.message_encoding == "cdr" for c in summary.channels.values())
-        topics = {channel.topic for _, channel, _ in reader.iter_messages()}
+        topics = {channel.topic for _, channel, _ in mcap_reader.iter_messages()}
     assert "/actions_hub" in topics and not any(t.startswith("rt/") for t in topics)
 
 
@@ -150,7 +150,8 @@ def test_replayed_pose_reaches_the_knowledge(recorded: tuple[Path, MissionReport
         conns = [c for c in reader.connections if c.topic == "/problem_expert/knowledge"]
         for _, stamp, raw in reader.messages(conns):
             values = {}
-            for text in reader.deserialize(raw, conns[0].msgtype).functions:
+            knowledge: Any = reader.deserialize(raw, conns[0].msgtype)
+            for text in knowledge.functions:
                 m = re.fullmatch(r"\(= \((robot_[xy]) tiago\) (\S+)\)", text)
                 if m:
                     values[m[1]] = float(m[2])

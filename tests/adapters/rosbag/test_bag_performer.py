@@ -159,7 +159,7 @@ def test_real_bag_segments_replay_through_the_auction(
         with AnyReader([tmp_path / "run"]) as reader:
             conns = [c for c in reader.connections if c.topic == "/tiago_nav/pose"]
             assert len(conns) == 1 and conns[0].msgtype == window[-1].msgtype
-            replayed = [
+            replayed: list[Any] = [
                 reader.deserialize(raw, conns[0].msgtype) for _, _, raw in reader.messages(conns)
             ]
         publish_rate_count = math.ceil(profile.duration * 10) + 1

@@ -6,6 +6,7 @@ import math
 import shutil
 import tracemalloc
 from pathlib import Path
+from typing import Any
 
 import pytest
 from plansys_bridge_adapters.rosbag.errors import (
@@ -71,7 +72,7 @@ def test_ros1_messages_become_ros2_messages(shared_bags: Path, source: tuple[str
     path = shared_bags / name
     with AnyReader([path]) as ros1:
         conn = next(c for c in ros1.connections if c.topic == topic)
-        originals = []
+        originals: list[Any] = []
         for _, _, raw in ros1.messages([conn]):
             originals.append(ros1.deserialize(raw, conn.msgtype))
             if len(originals) == 50:
