@@ -145,7 +145,6 @@ class BaseMonitor:
         heartbeat_timeout: float,
         odometry_timeout: float,
         error_frame_limit: int,
-        ignore_watchdog: bool = False,
     ) -> Problem | None:
         """Why the base cannot be driven now, or None when all is well."""
         if self.bus_errors > mark.bus_errors:
@@ -157,7 +156,7 @@ class BaseMonitor:
                 f"CAN bus error on {self.where}: {new_error_frames} error frame(s), last: "
                 f"{describe_error_frame(self.last_error_frame)}"
             )
-        if self.heartbeat_time is None or now - self.heartbeat_time > heartbeat_timeout:
+        if _stale(now, self.heartbeat_time, heartbeat_timeout):
             age = "never received" if self.heartbeat_time is None else (
                 f"none with a new counter for {now - self.heartbeat_time:.2f} s"
             )
@@ -174,15 +173,15 @@ class BaseMonitor:
             return Problem(f"base fault: {', '.join(names)} (state {status.state.name})")
         if faults.estop or status.state is BaseState.ESTOP:
             return Problem("base e-stop active")
-        if faults.watchdog and not ignore_watchdog:
+        if faults.watchdog:
             return Problem(
                 "base command watchdog tripped: velocity commands stopped reaching the base",
                 transient=True,
             )
         if status.state is BaseState.FAULT:
             return Problem("base reports state FAULT")
-        if self.pose_time is None or now - self.pose_time > odometry_timeout:
-            heard = max(self.pose_time or -math.inf, self.status_time or -math.inf)
+        if _stale(now, self.pose_time, odometry_timeout):
+            heard = max(t for t in (self.pose_time, self.status_time, -math.inf) if t is not None)
             if now - heard > odometry_timeout:
                 return Problem(
                     f"base silent on {self.where}: no odometry and no status for "
@@ -198,3 +197,7 @@ class BaseMonitor:
                 transient=True,
             )
         return None
+
+
+def _stale(now: float, last: float | None, timeout: float) -> bool:
+    return last is None or now - last > timeout

@@ -258,7 +258,7 @@ class CanBasePerformer(ActionPerformer):
             raise _BaseFailure("no odometry from the base", transient=True)
         return Pose2D(pose.x, pose.y, pose.yaw)
 
-    def _check(self, mark: Mark, *, ignore_watchdog: bool = False) -> None:
+    def _check(self, mark: Mark) -> None:
         safety = self.settings.safety
         problem = self.monitor.problem(
             self.clock.now(),
@@ -266,7 +266,6 @@ class CanBasePerformer(ActionPerformer):
             heartbeat_timeout=safety.heartbeat_timeout,
             odometry_timeout=safety.odometry_timeout,
             error_frame_limit=safety.error_frame_limit,
-            ignore_watchdog=ignore_watchdog,
         )
         if problem is not None:
             raise _BaseFailure(problem.message, problem.transient)
