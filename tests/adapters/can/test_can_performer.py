@@ -21,7 +21,7 @@ from plansys_bridge.hub.messages import PerformerState
 from plansys_bridge.hub.transport import InProcessTransport
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.pddl.parser import parse_domain
-from plansys_bridge.performers.base import PerformerContext
+from plansys_bridge.performers.base import ActionGoal, PerformerContext
 from plansys_bridge.performers.registry import load_performer_kind
 
 Scenario = Callable[[Rig], Coroutine[Any, Any, None]]
@@ -401,3 +401,13 @@ def test_move_on_a_scaled_wall_clock_with_the_notifier_reader(channel: str) -> N
     play(hub, channel, scenario,
          safety={"heartbeat_timeout": 2.0, "odometry_timeout": 2.0, "startup_timeout": 5.0},
          bus={"interface": "virtual", "channel": channel, "reader": "notifier"})
+
+
+def test_bid_is_the_distance_to_the_destination(hub: Hub, channel: str) -> None:
+    async def scenario(rig: Rig) -> None:
+        await settle(rig, 0.2)
+        goal = ActionGoal("move", ("r2d2", "dock", "kitchen"), "bid-1")
+        assert rig.performer.bid(goal) == pytest.approx(math.hypot(2.0, 1.0), abs=1e-3)
+        assert rig.performer.bid(ActionGoal("move", ("r2d2", "dock", "garage"), "bid-2")) is None
+
+    play(hub, channel, scenario)
