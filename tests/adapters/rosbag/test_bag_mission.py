@@ -162,3 +162,28 @@ def test_replayed_pose_reaches_the_knowledge(recorded: tuple[Path, MissionReport
     assert 30 <= len(positions) <= 60
     xs = [x for _, x, _ in positions]
     assert max(xs) == pytest.approx(6.8, abs=0.1)  # through the door at x = 6.8
+
+
+def test_recorded_mission_decodes_with_mcap_ros2(recorded: tuple[Path, MissionReport]) -> None:
+    """An independent CDR decoder (mcap-ros2-support) reads every message of the bag
+    from the definitions embedded in it."""
+    decoder = pytest.importorskip("mcap_ros2.decoder", reason="mcap-ros2-support not installed")
+    bag, report = recorded
+    [mcap_file] = bag.glob("*.mcap")
+    first: dict[str, Any] = {}
+    count = 0
+    with mcap_file.open("rb") as f:
+        reader = make_reader(f, decoder_factories=[decoder.DecoderFactory()])
+        for _, channel, _, msg in reader.iter_decoded_messages():
+            first.setdefault(channel.topic, msg)
+            count += 1
+    assert count == sum(read_mission(bag).topics.values())
+    request = first["/actions_hub"]
+    assert (request.type, request.node_id, request.action) == (1, "", "move")
+    assert first["/plansys_bridge/actions_hub"].request_id.endswith("/0")
+    assert report.result is not None
+    texts = [i.action for i in first["/executing_plan"].items]
+    assert texts == [s.text for s in report.result.plans[0].steps]
+    assert first["/performers_status"].node_name == "tiago_nav"
+    assert "(robot_at tiago kitchen)" in first["/problem_expert/knowledge"].predicates
+    assert first["/tiago_nav/pose"].child_frame_id == "base_footprint"
