@@ -254,3 +254,24 @@ def test_ros1_definition_that_differs_from_ros2_is_refused(tmp_path: Path) -> No
     with pytest.raises(BagTypeError, match="differs from ROS 2 Humble's") as err:
         list(read_poses(path, "/pose"))
     assert err.value.topic == "/pose" and str(path) in str(err.value)
+
+
+@pytest.mark.parametrize("bare_file", [False, True], ids=["rosbag2-dir", "bare-db3"])
+def test_ros2_sqlite3_bags(demo_bags: Path, tmp_path: Path, bare_file: bool) -> None:
+    """The same drive copied into a ROS 2 sqlite3 bag reads back identically."""
+    store = ros2_typestore()
+    path = tmp_path / "kitchen_db3"
+    with (
+        AnyReader([demo_bags / "kitchen_nav"]) as src,
+        Writer(path, version=9, storage_plugin=StoragePlugin.SQLITE3) as dst,
+    ):
+        conns = {
+            c.id: dst.add_connection(c.topic, c.msgtype, typestore=store) for c in src.connections
+        }
+        for conn, t, raw in src.messages():
+            dst.write(conns[conn.id], t, raw)
+    [db3] = path.glob("*.db3")
+    target = db3 if bare_file else path
+    expected = list(read_poses(demo_bags / "kitchen_nav", "/amcl_pose"))
+    assert list(read_poses(target, "/amcl_pose")) == expected
+    assert len(expected) == 149
