@@ -22,7 +22,7 @@ def make_hub() -> Hub:
     return Hub(InProcessTransport(), WallClock())
 
 
-COPTER_ACTIONS = {"takeoff": [], "fly": [], "land": [], "rtl": [], "hold": []}
+COPTER_ACTIONS: dict[str, list[str]] = {"takeoff": [], "fly": [], "land": [], "rtl": [], "hold": []}
 COPTER_COMMANDS = {
     "takeoff": {"do": "takeoff", "vehicle_arg": 0, "altitude": 10},
     "fly": {"do": "goto", "vehicle_arg": 0, "target_arg": 2},
@@ -30,7 +30,7 @@ COPTER_COMMANDS = {
     "rtl": {"do": "rtl", "vehicle_arg": 0},
     "hold": {"do": "hold", "vehicle_arg": 0},
 }
-ROVER_ACTIONS = {"drive": [], "hold": [], "rtl": [], "land": []}
+ROVER_ACTIONS: dict[str, list[str]] = {"drive": [], "hold": [], "rtl": [], "land": []}
 ROVER_COMMANDS = {
     "drive": {"do": "goto", "vehicle_arg": 0, "target_arg": 2},
     "hold": {"do": "hold", "vehicle_arg": 0},

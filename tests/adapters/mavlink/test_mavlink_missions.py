@@ -1,0 +1,107 @@
+"""Whole missions through the executor: plan, auction, fly and drive, on doubles."""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+import yaml
+from mavlink_support import CONFIGS, SPEEDUP
+from pymavlink.dialects.v20 import ardupilotmega as ml
+
+from plansys_bridge.hub.messages import ActionStatus
+from plansys_bridge.mission import MissionReport, run_mission
+from plansys_bridge.mission_config import mission_from_dict
+from plansys_bridge_adapters.mavlink.double import VehicleDouble
+
+FAST_TIMEOUTS = {"heartbeat": 1.0, "command": 0.5, "ekf": 20, "arm": 10, "action": 30}
+
+
+def load(name: str) -> dict[str, Any]:
+    data = yaml.safe_load((CONFIGS / name).read_text())
+    assert isinstance(data, dict)
+    return data
+
+
+def fast(data: dict[str, Any]) -> dict[str, Any]:
+    """The shipped mission with its doubles at test speed."""
+    for entry in data["performers"]:
+        if "double" in entry:
+            entry["double"] = {**entry["double"], "speedup": SPEEDUP, "ekf_delay": 4.0}
+        entry["timeouts"] = FAST_TIMEOUTS
+        entry["heartbeat_period"] = 0.2
+    data["auction"] = {"retry_period": 0.2, "liveness_timeout": 3.0}
+    return data
+
+
+def run(data: dict[str, Any]) -> MissionReport:
+    mission = mission_from_dict(data, source="test", base_dir=CONFIGS)
+    lines: list[str] = []
+    report = run_mission(mission, out=lines.append)
+    assert report.result is not None, "\n".join(lines)
+    return report
+
+
+def test_fleet_mission_copter_and_rover_at_once() -> None:
+    report = run(fast(load("mavlink_fleet.yaml")))
+    assert report.success, report.summary()
+    assert report.result is not None
+    records = report.result.actions
+    assert all(r.status == ActionStatus.SUCCEEDED for r in records)
+    by_vehicle = {r.performer for r in records if " uav1 " in r.text}
+    assert by_vehicle == {"uav1_performer"}
+    assert {r.performer for r in records if " ugv1 " in r.text} == {"ugv1_performer"}
+    # the copter and the rover really ran at the same time
+    first_drive = min(r.start or 0 for r in records if r.text.startswith("(drive"))
+    last_fly = max(r.end or 0 for r in records if r.text.startswith("(fly"))
+    assert first_drive < last_fly
+    assert report.result.efficiency_percent > 100.0
+
+
+def test_single_vehicle_missions() -> None:
+    for name in ("mavlink_copter.yaml", "mavlink_rover.yaml"):
+        report = run(fast(load(name)))
+        assert report.success, f"{name}: {report.summary()}"
+
+
+def test_failsafe_mid_mission_fails_cleanly_with_the_reason() -> None:
+    with VehicleDouble("copter", speedup=SPEEDUP, ekf_delay=4.0) as double:
+        data = fast(load("mavlink_copter.yaml"))
+        entry = data["performers"][0]
+        del entry["double"]
+        entry["url"] = double.url
+        data["replanning"] = {"max_replans": 1}
+
+        def inject() -> None:
+            if double.wait_for(lambda s: s["north"] > 20, timeout=30):
+                double.failsafe("Battery")
+
+        injector = threading.Thread(target=inject, name="failsafe-injector")
+        injector.start()
+        try:
+            report = run(data)
+        finally:
+            injector.join()
+    assert not report.success
+    assert report.result is not None
+    failed = [r for r in report.result.actions if r.status == ActionStatus.FAILED]
+    assert failed, report.summary()
+    assert failed[0].text.startswith("(fly uav1")
+    assert failed[0].message == f"{double.url}: failsafe: 'Battery Failsafe'"
+
+
+def test_refused_takeoff_fails_the_mission_with_the_reason() -> None:
+    with VehicleDouble("copter", speedup=SPEEDUP, ekf_delay=4.0) as double:
+        double.refuse_next(ml.MAV_CMD_NAV_TAKEOFF, ml.MAV_RESULT_DENIED)
+        data = fast(load("mavlink_copter.yaml"))
+        entry = data["performers"][0]
+        del entry["double"]
+        entry["url"] = double.url
+        data["replanning"] = {"max_replans": 0}
+        report = run(data)
+    assert not report.success
+    assert report.result is not None
+    failed = [r for r in report.result.actions if r.status == ActionStatus.FAILED]
+    assert [r.text for r in failed] == ["(takeoff uav1 pad)"]
+    assert failed[0].message == (f"{double.url}: MAV_CMD_NAV_TAKEOFF refused "
+                                 "(MAV_RESULT_DENIED)")
