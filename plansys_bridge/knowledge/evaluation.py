@@ -18,11 +18,21 @@ Why it is built this way:
 
 from __future__ import annotations
 
-import math
 from collections import OrderedDict
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 
 from plansys_bridge.errors import KnowledgeError
+from plansys_bridge.knowledge.formulas import (
+    DELTA,
+    compare,
+    conjuncts,
+    delta_variants,
+    describe_expr,
+    fluent_text,
+    free_vars,
+    negate,
+    predicate_uses,
+)
 from plansys_bridge.knowledge.grounding import (
     GroundAction,
     UnboundVariableError,
@@ -92,7 +102,6 @@ class UndefinedFluentError(EvaluationError):
 
 _EMPTY: frozenset[Args] = frozenset()
 _CACHE_LIMIT = 4096
-_DELTA = "#delta"
 _VarTypes = dict[str, frozenset[str] | None]  # variable -> accepted object types (None: any)
 
 
@@ -211,7 +220,7 @@ class Evaluator:
                 updates[key] = current * val
             else:
                 if val == 0:
-                    raise EvaluationError(f"scale-down of {_fmt_key(key)} by zero")
+                    raise EvaluationError(f"scale-down of {fluent_text(key)} by zero")
                 updates[key] = current / val
         return adds, deletes, updates
 
@@ -334,7 +343,9 @@ class Evaluator:
         ``state``, a disjunction (or an ``exists``) contributes only the first
         alternative that holds there; without one (or when none holds) all of them.
         """
-        walker = _AtomWalker(self, state)
+        from plansys_bridge.knowledge.plan_atoms import AtomWalker
+
+        walker = AtomWalker(self, state)
         walker.walk(cond, normalize_bindings(bindings) if bindings else {}, True)
         return walker.positive, walker.negative
 
@@ -345,7 +356,9 @@ class Evaluator:
         state: State | None = None,
     ) -> set[FluentKey]:
         """Ground fluents a condition reads (comparisons; derived bodies included)."""
-        walker = _AtomWalker(self, state)
+        from plansys_bridge.knowledge.plan_atoms import AtomWalker
+
+        walker = AtomWalker(self, state)
         walker.walk(cond, normalize_bindings(bindings) if bindings else {}, True)
         return walker.fluents
 
@@ -361,31 +374,12 @@ class Evaluator:
         there and ``forall`` ranges over its objects; without one every conditional
         effect counts and ``forall`` ranges over the domain's constants.
         """
-        adds: set[Atom] = set()
-        deletes: set[Atom] = set()
-        fluents: set[FluentKey] = set()
-        ctx = _Ctx(self, state if state is not None else self._constants_state(), None)
-        check = state is not None
+        from plansys_bridge.knowledge.plan_atoms import effect_atoms
 
-        def visit(eff: Effect, b: dict[str, str]) -> None:
-            if isinstance(eff, AndEffect):
-                for sub in eff.effects:
-                    visit(sub, b)
-            elif isinstance(eff, AddEffect):
-                adds.add(Atom(eff.atom.predicate, ground_args(eff.atom.args, b)))
-            elif isinstance(eff, DeleteEffect):
-                deletes.add(Atom(eff.atom.predicate, ground_args(eff.atom.args, b)))
-            elif isinstance(eff, NumericEffect):
-                fluents.add((eff.fluent.name, ground_args(eff.fluent.args, b)))
-            elif isinstance(eff, WhenEffect):
-                if not check or self._holds(eff.condition, b, ctx):
-                    visit(eff.effect, b)
-            elif isinstance(eff, ForallEffect):
-                for nb in self._enumerate(eff.variables, b, ctx):
-                    visit(eff.effect, nb)
+        return effect_atoms(self, effect, normalize_bindings(bindings) if bindings else {}, state)
 
-        visit(effect, normalize_bindings(bindings) if bindings else {})
-        return adds, deletes, fluents
+    def _context(self, state: State) -> _Ctx:
+        return _Ctx(self, state, None)
 
     def _constants_state(self) -> State:
         return State(objects={c.name: c.types[0] for c in self.domain.constants})
@@ -405,7 +399,7 @@ class Evaluator:
             return any(self._holds(c, b, ctx) for c in cond.operands)  # type: ignore[union-attr]
         if kind is Compare:
             cmp: Compare = cond  # type: ignore[assignment]
-            return _compare(cmp.op, self._value(cmp.left, b, ctx), self._value(cmp.right, b, ctx))
+            return compare(cmp.op, self._value(cmp.left, b, ctx), self._value(cmp.right, b, ctx))
         if kind is Equals:
             eq: Equals = cond  # type: ignore[assignment]
             left, right = ground_args((eq.left, eq.right), b)
@@ -420,7 +414,7 @@ class Evaluator:
         if kind is Forall:
             fa: Forall = cond  # type: ignore[assignment]
             inner, var_types = self._scope(fa.variables, b)
-            return next(self._solve(_negate(fa.body), inner, var_types, ctx), None) is None
+            return next(self._solve(negate(fa.body), inner, var_types, ctx), None) is None
         raise TypeError(f"not a condition: {cond!r}")
 
     def _scope(
@@ -485,7 +479,7 @@ class Evaluator:
         entry = self._free_cache.get(id(cond))
         if entry is not None and entry[0] is cond:
             return entry[1]
-        result = frozenset(_free_vars(cond))
+        result = frozenset(free_vars(cond))
         if len(self._free_cache) > _CACHE_LIMIT:
             self._free_cache.clear()
         self._free_cache[id(cond)] = (cond, result)
@@ -496,14 +490,14 @@ class Evaluator:
     ) -> Iterator[dict[str, str]]:
         """Bindings extending ``b`` that give every variable of ``var_types`` an object
         of its type and make ``cond`` hold."""
-        yield from self._join(_conjuncts(cond), b, var_types, ctx)
+        yield from self._join(conjuncts(cond), b, var_types, ctx)
 
     def _join(
-        self, conjuncts: list[Condition], b: dict[str, str], var_types: _VarTypes, ctx: _Ctx
+        self, parts: list[Condition], b: dict[str, str], var_types: _VarTypes, ctx: _Ctx
     ) -> Iterator[dict[str, str]]:
         unbound = [v for v in var_types if v not in b]
         if not unbound:
-            if all(self._holds(c, b, ctx) for c in conjuncts):
+            if all(self._holds(c, b, ctx) for c in parts):
                 yield b
             return
         pending = set(unbound)
@@ -514,7 +508,7 @@ class Evaluator:
         best_size = -1
         branch: Or | None = None
         rest: list[Condition] = []
-        for i, c in enumerate(conjuncts):
+        for i, c in enumerate(parts):
             free = self._free(c)
             if not free & pending:
                 if not self._holds(c, b, ctx):
@@ -525,7 +519,7 @@ class Evaluator:
                 merged = dict(var_types)
                 merged.update(extra)
                 kept = [*rest, *(x for x in (best, branch) if x is not None)]
-                yield from self._join(kept + body + conjuncts[i + 1 :], b, merged, ctx)
+                yield from self._join(kept + body + parts[i + 1 :], b, merged, ctx)
                 return
             if isinstance(c, Atom):
                 size = len(ctx.tuples(c.predicate))
@@ -546,7 +540,7 @@ class Evaluator:
             return
         if branch is not None:
             for option in branch.operands:
-                yield from self._join([*_conjuncts(option), *rest], b, var_types, ctx)
+                yield from self._join([*conjuncts(option), *rest], b, var_types, ctx)
             return
         name = unbound[0]
         for obj in self._objects_of(var_types[name], ctx.state):
@@ -562,7 +556,7 @@ class Evaluator:
         self._fresh += 1
         mapping = {v.name: f"{v.name}#{self._fresh}" for v in cond.variables}
         extra: _VarTypes = {mapping[v.name]: self._accepted(v.types) for v in cond.variables}
-        body = _conjuncts(substitute_condition(cond.body, mapping))
+        body = conjuncts(substitute_condition(cond.body, mapping))
         if len(self._rename_cache) > _CACHE_LIMIT:
             self._rename_cache.clear()
         self._rename_cache[id(cond)] = (cond, extra, body)
@@ -650,7 +644,7 @@ class Evaluator:
         deps: dict[str, list[tuple[str, bool]]] = {n: [] for n in names}
         for name, rules in self._derived_rules.items():
             for rule in rules:
-                for pred, negative in _predicate_uses(rule.condition, False):
+                for pred, negative in predicate_uses(rule.condition, False):
                     if pred in self._derived_rules:
                         deps[name].append((pred, negative))
         # A level is the number of negative edges below a predicate; a cycle through
@@ -696,9 +690,9 @@ class Evaluator:
             for name in stratum:
                 for rule in self._derived_rules[name]:
                     self._fire(rule, rule.condition, work[name], delta[name], ctx)
-            variants = self._delta_variants(stratum)
+            variants = self._deltadelta_variants(stratum)
             while any(delta.values()):
-                ctx.delta = {name + _DELTA: tuples for name, tuples in delta.items()}
+                ctx.delta = {name + DELTA: tuples for name, tuples in delta.items()}
                 delta = {name: set() for name in stratum}
                 for rule, body in variants:
                     name = rule.head.name
@@ -722,7 +716,7 @@ class Evaluator:
                 target.add(args)
                 new.add(args)
 
-    def _delta_variants(self, stratum: list[str]) -> list[tuple[DerivedPredicate, Condition]]:
+    def _deltadelta_variants(self, stratum: list[str]) -> list[tuple[DerivedPredicate, Condition]]:
         key = tuple(stratum)
         found = self._variant_cache.get(key)
         if found is None:
@@ -731,7 +725,7 @@ class Evaluator:
                 (rule, variant)
                 for name in stratum
                 for rule in self._derived_rules[name]
-                for variant in _variants(rule.condition, names)
+                for variant in delta_variants(rule.condition, names)
             ]
             self._variant_cache[key] = found
         return found
@@ -760,7 +754,7 @@ class Evaluator:
             if op.op == "*":
                 return left * right
             if right == 0:
-                raise EvaluationError(f"division by zero in {_describe(op)}")
+                raise EvaluationError(f"division by zero in {describe_expr(op)}")
             return left / right
         if kind is Negate:
             return -self._value(expr.operand, b, ctx)  # type: ignore[union-attr]
@@ -812,217 +806,3 @@ class Evaluator:
                     self._collect(body, nb, ctx, adds, deletes, numeric)
         else:
             raise TypeError(f"not an effect: {effect!r}")
-
-
-# ======================================================================= helpers
-
-
-def _compare(op: str, left: float, right: float) -> bool:
-    if op == "=":
-        return math.isclose(left, right, rel_tol=1e-9, abs_tol=1e-9)
-    if op == "<":
-        return left < right
-    if op == "<=":
-        return left <= right or math.isclose(left, right, rel_tol=1e-9, abs_tol=1e-9)
-    if op == ">":
-        return left > right
-    if op == ">=":
-        return left >= right or math.isclose(left, right, rel_tol=1e-9, abs_tol=1e-9)
-    raise ValueError(f"unknown comparison {op}")
-
-
-def _fmt_key(key: FluentKey) -> str:
-    return "(" + " ".join((key[0], *key[1])) + ")"
-
-
-def _describe(expr: NumExpr) -> str:
-    if isinstance(expr, Number):
-        return repr(expr.value)
-    if isinstance(expr, FluentRef):
-        return "(" + " ".join((expr.name, *expr.args)) + ")"
-    if isinstance(expr, DurationRef):
-        return "?duration"
-    if isinstance(expr, Negate):
-        return f"(- {_describe(expr.operand)})"
-    return f"({expr.op} {_describe(expr.left)} {_describe(expr.right)})"
-
-
-def _conjuncts(cond: Condition) -> list[Condition]:
-    """Flatten nested ``and``s so a join sees every conjunct at once."""
-    if isinstance(cond, And):
-        out: list[Condition] = []
-        for c in cond.operands:
-            out.extend(_conjuncts(c))
-        return out
-    return [cond]
-
-
-def _negate(cond: Condition) -> Condition:
-    """``(not cond)`` with the negation pushed one level in, so a join can use atoms
-    (``not (imply a b)`` becomes ``(and a (not b))``)."""
-    if isinstance(cond, Not):
-        return cond.operand
-    if isinstance(cond, Imply):
-        return And((cond.antecedent, _negate(cond.consequent)))
-    if isinstance(cond, Or):
-        return And(tuple(_negate(c) for c in cond.operands))
-    return Not(cond)
-
-
-def _free_vars(cond: Condition) -> set[str]:
-    if isinstance(cond, Atom):
-        return {a for a in cond.args if a[:1] == "?"}
-    if isinstance(cond, (And, Or)):
-        out: set[str] = set()
-        for c in cond.operands:
-            out |= _free_vars(c)
-        return out
-    if isinstance(cond, Not):
-        return _free_vars(cond.operand)
-    if isinstance(cond, Imply):
-        return _free_vars(cond.antecedent) | _free_vars(cond.consequent)
-    if isinstance(cond, (Exists, Forall)):
-        return _free_vars(cond.body) - {v.name for v in cond.variables}
-    if isinstance(cond, Equals):
-        return {a for a in (cond.left, cond.right) if a[:1] == "?"}
-    if isinstance(cond, Compare):
-        return _expr_vars(cond.left) | _expr_vars(cond.right)
-    return set()
-
-
-def _expr_vars(expr: NumExpr) -> set[str]:
-    if isinstance(expr, FluentRef):
-        return {a for a in expr.args if a[:1] == "?"}
-    if isinstance(expr, BinaryOp):
-        return _expr_vars(expr.left) | _expr_vars(expr.right)
-    if isinstance(expr, Negate):
-        return _expr_vars(expr.operand)
-    return set()
-
-
-def _variants(cond: Condition, names: set[str]) -> list[Condition]:
-    """Copies of ``cond`` with one positive use of a ``names`` predicate renamed to its
-    delta table (semi-naive evaluation)."""
-    if isinstance(cond, Atom):
-        return [Atom(cond.predicate + _DELTA, cond.args)] if cond.predicate in names else []
-    if isinstance(cond, (And, Or)):
-        out: list[Condition] = []
-        ops = cond.operands
-        for i, op in enumerate(ops):
-            for v in _variants(op, names):
-                replaced = (*ops[:i], v, *ops[i + 1 :])
-                out.append(And(replaced) if isinstance(cond, And) else Or(replaced))
-        return out
-    if isinstance(cond, Exists):
-        return [Exists(cond.variables, v) for v in _variants(cond.body, names)]
-    if isinstance(cond, Imply):
-        return [Imply(cond.antecedent, v) for v in _variants(cond.consequent, names)]
-    return []
-
-
-def _predicate_uses(cond: Condition, negative: bool) -> Iterator[tuple[str, bool]]:
-    """(predicate, needs-complete-knowledge) for every atom of a condition."""
-    if isinstance(cond, Atom):
-        yield cond.predicate, negative
-    elif isinstance(cond, (And, Or)):
-        for c in cond.operands:
-            yield from _predicate_uses(c, negative)
-    elif isinstance(cond, Not):
-        yield from _predicate_uses(cond.operand, True)
-    elif isinstance(cond, Imply):
-        yield from _predicate_uses(cond.antecedent, True)
-        yield from _predicate_uses(cond.consequent, negative)
-    elif isinstance(cond, Exists):
-        yield from _predicate_uses(cond.body, negative)
-    elif isinstance(cond, Forall):
-        yield from _predicate_uses(cond.body, True)
-
-
-class _AtomWalker:
-    """Collects the ground atoms and fluents a condition depends on."""
-
-    def __init__(self, ev: Evaluator, state: State | None) -> None:
-        self.ev = ev
-        self.state = state
-        self.ctx = _Ctx(ev, state if state is not None else ev._constants_state(), None)
-        self.positive: set[Atom] = set()
-        self.negative: set[Atom] = set()
-        self.fluents: set[FluentKey] = set()
-        self._expanding: set[tuple[str, Args]] = set()
-
-    def _holds(self, cond: Condition, b: Mapping[str, str]) -> bool:
-        try:
-            return self.ev._holds(cond, b, self.ctx)
-        except KnowledgeError:
-            return False
-
-    def _choose(self, options: list[tuple[Condition, dict[str, str]]], positive: bool) -> None:
-        """A disjunction: with a state, walk the first alternative that does its job."""
-        if self.state is not None:
-            for cond, b in options:
-                if self._holds(cond, b) == positive:
-                    self.walk(cond, b, positive)
-                    return
-        for cond, b in options:
-            self.walk(cond, b, positive)
-
-    def walk(self, cond: Condition, b: dict[str, str], positive: bool) -> None:
-        if isinstance(cond, Atom):
-            args = ground_args(cond.args, b)
-            rules = self.ev._derived_rules.get(cond.predicate)
-            if rules is None:
-                (self.positive if positive else self.negative).add(Atom(cond.predicate, args))
-                return
-            key = (cond.predicate, args)
-            if key in self._expanding:
-                return
-            self._expanding.add(key)
-            options = []
-            for rule in rules:
-                rb = {p.name: a for p, a in zip(rule.head.parameters, args, strict=True)}
-                options.append((rule.condition, rb))
-            # Several rules for one head act like a disjunction of their bodies.
-            if len(options) == 1:
-                self.walk(options[0][0], options[0][1], positive)
-            elif positive:
-                self._choose(options, True)
-            else:
-                for c, rb in options:
-                    self.walk(c, rb, False)
-            self._expanding.discard(key)
-        elif isinstance(cond, And):
-            if positive:
-                for c in cond.operands:
-                    self.walk(c, b, True)
-            else:
-                self._choose([(c, b) for c in cond.operands], False)
-        elif isinstance(cond, Or):
-            if positive:
-                self._choose([(c, b) for c in cond.operands], True)
-            else:
-                for c in cond.operands:
-                    self.walk(c, b, False)
-        elif isinstance(cond, Not):
-            self.walk(cond.operand, b, not positive)
-        elif isinstance(cond, Imply):
-            self.walk(Or((Not(cond.antecedent), cond.consequent)), b, positive)
-        elif isinstance(cond, (Exists, Forall)):
-            groundings = [(cond.body, nb) for nb in self.ev._enumerate(cond.variables, b, self.ctx)]
-            disjunctive = isinstance(cond, Exists) == positive
-            if disjunctive:
-                self._choose(groundings, positive)
-            else:
-                for body, nb in groundings:
-                    self.walk(body, nb, positive)
-        elif isinstance(cond, Compare):
-            self._expr(cond.left, b)
-            self._expr(cond.right, b)
-
-    def _expr(self, expr: NumExpr, b: Mapping[str, str]) -> None:
-        if isinstance(expr, FluentRef):
-            self.fluents.add((expr.name, ground_args(expr.args, b)))
-        elif isinstance(expr, BinaryOp):
-            self._expr(expr.left, b)
-            self._expr(expr.right, b)
-        elif isinstance(expr, Negate):
-            self._expr(expr.operand, b)
