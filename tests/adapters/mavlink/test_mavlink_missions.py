@@ -7,12 +7,12 @@ from typing import Any
 
 import yaml
 from mavlink_support import CONFIGS, SPEEDUP
+from plansys_bridge_adapters.mavlink.double import VehicleDouble
 from pymavlink.dialects.v20 import ardupilotmega as ml
 
 from plansys_bridge.hub.messages import ActionStatus
 from plansys_bridge.mission import MissionReport, run_mission
 from plansys_bridge.mission_config import mission_from_dict
-from plansys_bridge_adapters.mavlink.double import VehicleDouble
 
 FAST_TIMEOUTS = {"heartbeat": 1.0, "command": 0.5, "ekf": 20, "arm": 10, "action": 30}
 
