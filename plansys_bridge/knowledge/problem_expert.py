@@ -27,6 +27,7 @@ from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.hub.messages import Knowledge
 from plansys_bridge.knowledge.domain_expert import DomainExpert
 from plansys_bridge.knowledge.evaluation import Evaluator
+from plansys_bridge.knowledge.formulas import fluent_text
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import (
     TRUE,
@@ -233,7 +234,7 @@ class ProblemExpert:
 
     def _check_fluent(self, name: str, args: tuple[str, ...]) -> FluentKey:
         key = (name.lower(), tuple(a.lower() for a in args))
-        text = _fluent_text(key)
+        text = fluent_text(key)
         fdef = self.domain_expert.get_function(key[0])
         if fdef is None:
             raise KnowledgeError(f"function {text}: unknown function {key[0]!r}")
@@ -274,7 +275,7 @@ class ProblemExpert:
 
     def _check_expr(self, expr: NumExpr, scope: dict[str, tuple[str, ...]]) -> None:
         if isinstance(expr, FluentRef):
-            text = _fluent_text((expr.name, expr.args))
+            text = fluent_text((expr.name, expr.args))
             fdef = self.domain_expert.get_function(expr.name)
             if fdef is None:
                 raise KnowledgeError(f"condition {text}: unknown function {expr.name!r}")
@@ -661,10 +662,6 @@ class ProblemExpert:
                 ),
                 goal=write_condition(self._goal) if self._goal is not None else "",
             )
-
-
-def _fluent_text(key: FluentKey) -> str:
-    return "(" + " ".join((key[0], *key[1])) + ")"
 
 
 def _condition_objects(cond: Condition) -> set[str]:
