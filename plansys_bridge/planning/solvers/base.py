@@ -135,6 +135,8 @@ class Solver(ABC):
             outcome = self._solve(task, timeout)
         except PlansysBridgeError as exc:
             outcome = SolverOutcome(PlanStatus.ERROR, message=str(exc))
+        except OSError as exc:  # the run folder could not be written, the program not run
+            outcome = SolverOutcome(PlanStatus.ERROR, message=f"{self.name}: {exc}")
         if outcome.status is PlanStatus.SOLVED and outcome.plan is None:
             outcome = SolverOutcome(
                 PlanStatus.ERROR, message="solver reported success without a plan"
