@@ -20,7 +20,7 @@ import lzma
 import math
 import struct
 import zlib
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -238,46 +238,65 @@ class BagReader:
 
     # -- reading -----------------------------------------------------------------
     def messages(
-        self, topic: str, start_ns: int | None = None, stop_ns: int | None = None
+        self,
+        topics: str | Sequence[str],
+        start_ns: int | None = None,
+        stop_ns: int | None = None,
     ) -> Iterator[RawMessage]:
-        """Messages of ``topic`` in ``[start_ns, stop_ns)`` as ROS 2 CDR bytes."""
-        conns = self._connections(topic)
-        msgtype = self.msgtype(topic)
+        """Messages of one or several topics in ``[start_ns, stop_ns)``, in time order,
+        as ROS 2 CDR bytes (ROS 1 messages converted)."""
+        names = [topics] if isinstance(topics, str) else list(topics)
         store = ros2_typestore()
-        if msgtype not in store.fielddefs:
-            raise BagTypeError(
-                f"message type {msgtype} is unknown to ROS 2 Humble", self.path, topic
-            )
-        reader = self.reader
+        conns: list[Connection] = []
+        types: dict[str, str] = {}
+        for topic in names:
+            types[topic] = self.ros2_msgtype(topic)
+            conns.extend(self._connections(topic))
+        where = names[0] if len(names) == 1 else ", ".join(names)
         ros1 = self.is_ros1
-        if ros1:
-            self._check_convertible(topic, msgtype)
         last: int | None = None
-        it = reader.messages(conns, start=start_ns, stop=stop_ns)
+        it = self.reader.messages(conns, start=start_ns, stop=stop_ns)
         while True:
             try:
-                item = next(it)
+                conn, timestamp, raw = next(it)
             except StopIteration:
                 return
             except _READ_ERRORS as exc:
                 raise BagCorruptError(
                     f"bag truncated or damaged after the last good message: {exc}",
                     self.path,
-                    topic,
+                    where,
                     last,
                 ) from exc
-            _conn, timestamp, raw = item
+            msgtype = types[conn.topic]
             try:
                 cdr = bytes(store.ros1_to_cdr(raw, msgtype)) if ros1 else bytes(raw)
             except _READ_ERRORS as exc:
                 raise BagCorruptError(
-                    f"message cannot be decoded as {msgtype}: {exc}", self.path, topic, timestamp
+                    f"message cannot be decoded as {msgtype}: {exc}",
+                    self.path,
+                    conn.topic,
+                    timestamp,
                 ) from exc
             last = timestamp
-            yield RawMessage(topic, msgtype, timestamp, cdr)
+            yield RawMessage(conn.topic, msgtype, timestamp, cdr)
+
+    def ros2_msgtype(self, topic: str) -> str:
+        """The topic's ROS 2 type; BagTypeError if its messages cannot be given as one.
+
+        The type must be known to ROS 2 Humble, and a ROS 1 definition must have the
+        ROS 2 type's layout (bar the header's ``seq``). Nothing is read.
+        """
+        msgtype = self.msgtype(topic)
+        if msgtype not in ros2_typestore().fielddefs:
+            raise BagTypeError(
+                f"message type {msgtype} is unknown to ROS 2 Humble", self.path, topic
+            )
+        if self.is_ros1:
+            self._check_convertible(topic, msgtype)
+        return msgtype
 
     def _check_convertible(self, topic: str, msgtype: str) -> None:
-        """A ROS 1 definition must have the ROS 2 type's layout (bar the header's seq)."""
         try:
             same = is_same_wireformat(self.reader.typestore, ros2_typestore(), msgtype, msgtype)
         except KeyError as exc:
