@@ -10,10 +10,10 @@ a noisy bus must not crash or confuse the adapter.
 
 Two readers:
 
-- ``notifier``: python-can's :class:`can.Notifier` feeding an
-  :class:`can.AsyncBufferedReader`. On SocketCAN it watches the socket's file
-  descriptor from the event loop; on other interfaces it uses python-can's reader
-  thread. This is the choice on a robot.
+- ``notifier``: on an interface with a file descriptor (SocketCAN) the event loop
+  watches the socket and drains it when readable; on the others python-can's
+  :class:`can.Notifier` thread feeds an :class:`can.AsyncBufferedReader`. This is
+  the choice on a robot.
 - ``poll``: a task on the event loop drains ``bus.recv(0)`` every ``poll_period``.
   No threads, so it runs in virtual time (the project's VirtualClock) and tests are
   deterministic; the cost is up to ``poll_period`` of added latency.
@@ -27,7 +27,7 @@ import asyncio
 import contextlib
 import logging
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol
 
@@ -60,6 +60,8 @@ class BusConfig:
     reader: ReaderKind = "auto"
     poll_period: float = 0.005
     send_timeout: float = 0.05
+    reopen_period: float | None = 1.0
+    """After a driver error, try to reopen the interface this often (None: never)."""
     options: Mapping[str, Any] = field(default_factory=dict)
     """Extra keyword arguments for :class:`can.Bus` (e.g. ``fd``, ``receive_own_messages``)."""
 
@@ -77,6 +79,7 @@ class BusCounters:
     error_frames: int = 0
     send_errors: int = 0
     bus_errors: int = 0
+    reopens: int = 0
     malformed: Counter[str] = field(default_factory=Counter)
 
     @property
@@ -101,6 +104,15 @@ class _BusErrorMarker:
         self.exc = exc
 
 
+def _fileno(bus: can.BusABC) -> int | None:
+    """The bus's file descriptor if it has one the event loop can watch."""
+    try:
+        fd = bus.fileno()
+    except (NotImplementedError, OSError, AttributeError):
+        return None
+    return fd if isinstance(fd, int) and fd >= 0 else None
+
+
 class _LoopReader(can.AsyncBufferedReader):
     """AsyncBufferedReader that also forwards reader-thread errors into the queue."""
 
@@ -116,23 +128,45 @@ def describe_frame(msg: can.Message) -> str:
     return f"{frame_id}{kind} [{len(msg.data)}] {bytes(msg.data).hex(' ')}".rstrip()
 
 
-class CanBusClient:
-    """One python-can bus, its reader, and the DBC classification of its frames."""
+BusFactory = Callable[..., can.BusABC]
 
-    def __init__(self, config: BusConfig, dbc: MobileBaseDbc, listener: FrameListener) -> None:
+
+class CanBusClient:
+    """One python-can bus, its reader, and the DBC classification of its frames.
+
+    ``bus_factory`` builds the python-can bus from the config's keywords
+    (``interface``, ``channel``, ``bitrate``, options); :class:`can.Bus` by default.
+    """
+
+    def __init__(
+        self,
+        config: BusConfig,
+        dbc: MobileBaseDbc,
+        listener: FrameListener,
+        bus_factory: BusFactory = can.Bus,
+    ) -> None:
         self.config = config
         self.dbc = dbc
         self.listener = listener
         self.counters = BusCounters()
+        self._factory = bus_factory
+        self._kind: ReaderKind = "manual"
         self._bus: can.BusABC | None = None
+        self._fd: int | None = None
         self._notifier: can.Notifier | None = None
-        self._reader: _LoopReader | None = None
         self._task: asyncio.Task[None] | None = None
+        self._reopen_task: asyncio.Task[None] | None = None
+        self._broken: can.BusABC | None = None
         self._closing = False
 
     @property
     def is_open(self) -> bool:
         return self._bus is not None
+
+    @property
+    def reopening(self) -> bool:
+        """A driver error closed the interface and it is being reopened."""
+        return self._reopen_task is not None
 
     @property
     def bus(self) -> can.BusABC | None:
@@ -144,44 +178,72 @@ class CanBusClient:
         if self._bus is not None:
             return
         kind = reader or self.config.reader
-        if kind == "auto":
-            kind = "notifier"
+        self._kind = "notifier" if kind == "auto" else kind
+        self._closing = False
+        self._bus = self._create_bus()
+        self._start_reader(self._bus)
+
+    def _create_bus(self) -> can.BusABC:
         kwargs: dict[str, Any] = dict(self.config.options)
         if self.config.bitrate is not None:
             kwargs["bitrate"] = self.config.bitrate
         try:
-            bus = can.Bus(interface=self.config.interface, channel=self.config.channel, **kwargs)
+            return self._factory(
+                interface=self.config.interface, channel=self.config.channel, **kwargs
+            )
         except (can.CanError, OSError, ValueError, ImportError, TypeError) as exc:
-            raise BusOpenError(
-                f"cannot open CAN bus {self.config.describe()}: {exc}"
-            ) from exc
-        self._bus = bus
-        self._closing = False
+            raise BusOpenError(f"cannot open CAN bus {self.config.describe()}: {exc}") from exc
+
+    def _start_reader(self, bus: can.BusABC) -> None:
         loop = asyncio.get_running_loop()
-        if kind == "notifier":
-            self._reader = _LoopReader()
-            self._notifier = can.Notifier(bus, [self._reader], timeout=0.1, loop=loop)
-            self._task = loop.create_task(self._pump_notifier(self._reader))
-        elif kind == "poll":
+        if self._kind == "notifier":
+            fd = _fileno(bus)
+            if fd is not None:
+                # SocketCAN: the loop watches the socket. Our own guarded drain instead of
+                # the Notifier's, so a failing socket becomes one bus error, not a spin.
+                loop.add_reader(fd, self.drain)
+                self._fd = fd
+            else:
+                reader = _LoopReader()
+                self._notifier = can.Notifier(bus, [reader], timeout=0.1, loop=loop)
+                self._task = loop.create_task(self._pump_notifier(reader))
+        elif self._kind == "poll" and self._task is None:
             self._task = loop.create_task(self._poll())
+
+    async def _stop_reader(self) -> None:
+        """Stop watching the current bus (the poll task survives: it follows ``_bus``)."""
+        if self._fd is not None:
+            asyncio.get_running_loop().remove_reader(self._fd)
+            self._fd = None
+        if self._notifier is not None:
+            notifier, self._notifier = self._notifier, None
+            task, self._task = self._task, None
+            if task is not None and task is not asyncio.current_task():
+                task.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await task
+            # Joining python-can's reader thread blocks for up to its timeout.
+            await asyncio.get_running_loop().run_in_executor(None, notifier.stop, 1.0)
 
     async def close(self) -> None:
         """Stop reading and shut the interface down; safe to call twice."""
         self._closing = True
+        if self._reopen_task is not None:
+            self._reopen_task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._reopen_task
+            self._reopen_task = None
+        await self._stop_reader()
         if self._task is not None:
             self._task.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await self._task
             self._task = None
-        if self._notifier is not None:
-            notifier = self._notifier
-            self._notifier = None
-            # Joining python-can's reader thread blocks for up to its timeout.
-            await asyncio.get_running_loop().run_in_executor(None, notifier.stop, 1.0)
-        if self._bus is not None:
-            bus = self._bus
-            self._bus = None
-            bus.shutdown()
+        for bus in (self._broken, self._bus):
+            if bus is not None:
+                with contextlib.suppress(Exception):
+                    bus.shutdown()
+        self._broken = self._bus = None
 
     def send_frame(self, frame: Frame) -> None:
         """Encode with the DBC and send; a failure raises :class:`BusSendError`."""
@@ -233,7 +295,40 @@ class CanBusClient:
     def _bus_failed(self, exc: Exception) -> None:
         self.counters.bus_errors += 1
         _LOG.error("%s: bus error: %s", self.config.describe(), exc)
+        if self._fd is not None:
+            asyncio.get_running_loop().remove_reader(self._fd)
+            self._fd = None
+        if self.config.reopen_period is not None and not self._closing and self._bus is not None:
+            # Stop using the failed interface at once (sends fail clearly as "not open")
+            # and bring it back in the background: a link that flaps heals by itself.
+            self._broken, self._bus = self._bus, None
+            if self._reopen_task is None:
+                self._reopen_task = asyncio.get_running_loop().create_task(self._reopen())
         self.listener.on_bus_error(exc)
+
+    async def _reopen(self) -> None:
+        period = self.config.reopen_period
+        assert period is not None
+        try:
+            while not self._closing:
+                await asyncio.sleep(period)
+                await self._stop_reader()
+                if self._broken is not None:
+                    broken, self._broken = self._broken, None
+                    with contextlib.suppress(Exception):
+                        broken.shutdown()
+                try:
+                    bus = self._create_bus()
+                except BusOpenError as exc:
+                    _LOG.warning("%s; retrying in %g s", exc, period)
+                    continue
+                self._bus = bus
+                self._start_reader(bus)
+                self.counters.reopens += 1
+                _LOG.warning("%s: reopened after a bus error", self.config.describe())
+                return
+        finally:
+            self._reopen_task = None
 
     def _dispatch_safely(self, msg: can.Message) -> None:
         try:

@@ -392,6 +392,8 @@ class BaseDouble:
         self.battery = max(0.0, self.battery - drain)
 
     def _send(self, frame: Frame) -> None:
+        if not self.client.is_open:
+            return  # reopening after a bus error: a real controller's TX is down too
         try:
             self.client.send_frame(frame)
         except Exception as exc:

@@ -282,7 +282,8 @@ class CanBasePerformer(ActionPerformer):
         try:
             self.client.send_frame(cmd)
         except BusSendError as exc:
-            raise _BaseFailure(str(exc)) from exc
+            # While the interface is being reopened the failure may heal.
+            raise _BaseFailure(str(exc), transient=self.client.reopening) from exc
 
     def _stop_quietly(self) -> None:
         try:
@@ -301,16 +302,16 @@ class CanBasePerformer(ActionPerformer):
         period = 1.0 / safety.command_rate
         start = self.clock.now()
         while True:
-            self._command(0.0, 0.0)
             timed_out = self.clock.now() - start >= safety.startup_timeout
-            status_time = self.monitor.status_time
-            if (status_time is not None and status_time > start) or timed_out:
-                try:
+            try:
+                self._command(0.0, 0.0)
+                status_time = self.monitor.status_time
+                if (status_time is not None and status_time > start) or timed_out:
                     self._check(mark)
                     return
-                except _BaseFailure as exc:
-                    if timed_out or not exc.transient:
-                        raise
+            except _BaseFailure as exc:
+                if timed_out or not exc.transient:
+                    raise
             await self.clock.sleep(period)
 
     async def _follow(

@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import socket
+import threading
+from collections import deque
+from typing import Any
 
 import can
 import pytest
@@ -40,6 +44,53 @@ class Sink:
 
     def on_bus_error(self, exc: Exception) -> None:
         self.bus_errors.append(exc)
+
+
+class SocketPairBus(can.BusABC):
+    """A python-can interface whose receive queue wakes a socket, as SocketCAN's does.
+
+    The kernel's SocketCAN is not available here; this exercises the same path of
+    the client: the event loop watching the bus's file descriptor.
+    """
+
+    def __init__(self, channel: str = "pair", **kwargs: Any) -> None:
+        super().__init__(channel=channel, **kwargs)
+        self.channel_info = f"socketpair {channel}"
+        self._rx, self._tx = socket.socketpair()
+        self._rx.setblocking(False)
+        self.queue: deque[can.Message] = deque()
+        self.failure: Exception | None = None
+        self.recv_calls = 0
+
+    def fileno(self) -> int:
+        return self._rx.fileno()
+
+    def inject(self, msg: can.Message) -> None:
+        self.queue.append(msg)
+        self._tx.send(b"f")
+
+    def fail(self, exc: Exception) -> None:
+        """Make the socket readable for good and every receive fail (a downed link)."""
+        self.failure = exc
+        self._tx.send(b"!")
+
+    def _recv_internal(self, timeout: float | None) -> tuple[can.Message | None, bool]:
+        self.recv_calls += 1
+        if self.failure is not None:
+            raise self.failure
+        try:
+            self._rx.recv(1)
+        except BlockingIOError:
+            return None, False
+        return self.queue.popleft(), False
+
+    def send(self, msg: can.Message, timeout: float | None = None) -> None:
+        return None
+
+    def shutdown(self) -> None:
+        super().shutdown()
+        self._rx.close()
+        self._tx.close()
 
 
 class Raising(Sink):
@@ -123,7 +174,7 @@ def test_a_listener_bug_does_not_stop_the_reader(
 def test_driver_error_reaches_the_listener_and_sending_fails(channel: str) -> None:
     async def main() -> None:
         sink = Sink()
-        client = CanBusClient(BusConfig(channel=channel), DBC, sink)
+        client = CanBusClient(BusConfig(channel=channel, reopen_period=None), DBC, sink)
         await client.open(reader="poll")
         assert client.bus is not None
         client.bus.shutdown()  # the interface vanishes under the reader
@@ -136,6 +187,77 @@ def test_driver_error_reaches_the_listener_and_sending_fails(channel: str) -> No
         with pytest.raises(BusSendError, match="not open"):
             client.send_frame(OdomPose(0.0, 0.0, 0.0))
 
+    run(main(), VirtualClock())
+
+
+# python-can's Notifier thread re-raises the driver error after reporting it.
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnhandledThreadExceptionWarning")
+@pytest.mark.parametrize("reader", ["poll", "notifier"])
+def test_interface_is_reopened_after_a_driver_error(channel: str, reader: str) -> None:
+    async def main() -> None:
+        sink = Sink()
+        client = CanBusClient(BusConfig(channel=channel, reopen_period=0.2), DBC, sink)
+        other = can.Bus(interface="virtual", channel=channel)
+        await client.open(reader=reader)  # type: ignore[arg-type]
+        try:
+            assert client.bus is not None
+            client.bus.shutdown()
+            for _ in range(100):
+                if sink.bus_errors:
+                    break
+                await asyncio.sleep(0.01)
+            assert sink.bus_errors and client.reopening and not client.is_open
+            with pytest.raises(BusSendError, match="not open"):
+                client.send_frame(OdomPose(0.0, 0.0, 0.0))
+            for _ in range(100):
+                if client.is_open:
+                    break
+                await asyncio.sleep(0.01)
+            assert client.counters.reopens == 1 and not client.reopening
+            other.send(DBC.encode(OdomPose(3.0, 2.0, 1.0)))
+            for _ in range(100):
+                if sink.frames:
+                    break
+                await asyncio.sleep(0.01)
+            assert sink.frames == [OdomPose(3.0, 2.0, 1.0)]
+        finally:
+            await client.close()
+            other.shutdown()
+
+    run(main(), VirtualClock() if reader == "poll" else WallClock())
+
+
+def test_file_descriptor_reader_turns_a_failing_socket_into_one_bus_error() -> None:
+    buses: list[SocketPairBus] = []
+
+    def factory(**kwargs: Any) -> can.BusABC:
+        buses.append(SocketPairBus(kwargs["channel"]))
+        return buses[-1]
+
+    async def main() -> None:
+        sink = Sink()
+        client = CanBusClient(BusConfig(interface="pair", channel="p0", reopen_period=0.5),
+                              DBC, sink, bus_factory=factory)
+        await client.open(reader="notifier")
+        try:
+            buses[0].inject(DBC.encode(OdomPose(1.0, 0.0, 0.0)))
+            await asyncio.sleep(0.01)
+            assert sink.frames == [OdomPose(1.0, 0.0, 0.0)]
+            assert threading.active_count() == threads_before  # no reader thread
+            calls = buses[0].recv_calls
+            buses[0].fail(can.CanOperationError("Network is down"))
+            await asyncio.sleep(0.2)
+            # One error, and the dead socket is no longer watched (no busy loop).
+            assert len(sink.bus_errors) == 1 and buses[0].recv_calls == calls + 1
+            await asyncio.sleep(0.5)
+            assert client.counters.reopens == 1 and len(buses) == 2
+            buses[1].inject(DBC.encode(OdomPose(2.0, 0.0, 0.0)))
+            await asyncio.sleep(0.01)
+            assert sink.frames[-1] == OdomPose(2.0, 0.0, 0.0)
+        finally:
+            await client.close()
+
+    threads_before = threading.active_count()
     run(main(), VirtualClock())
 
 

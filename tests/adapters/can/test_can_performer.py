@@ -411,3 +411,17 @@ def test_bid_is_the_distance_to_the_destination(hub: Hub, channel: str) -> None:
         assert rig.performer.bid(ActionGoal("move", ("r2d2", "dock", "garage"), "bid-2")) is None
 
     play(hub, channel, scenario)
+
+
+def test_interface_reopens_after_a_driver_error(hub: Hub, channel: str) -> None:
+    async def scenario(rig: Rig) -> None:
+        _client, task = await moving(rig, 1.5)
+        _shutdown(rig)
+        outcome = await task
+        assert "CAN bus error" in outcome.status
+        # The next action waits for the interface to come back, then drives.
+        outcome = await move(rig, "dock")
+        assert outcome.success, outcome.status
+        assert rig.performer.client.counters.reopens == 1
+
+    play(hub, channel, scenario, safety={"startup_timeout": 3.0})
