@@ -8,7 +8,8 @@ who performed it and how it ended.
 
 :func:`replay_plan` runs a recorded plan again on a hub with the same performers:
 each action is auctioned at its planned start time (relative to the replay start),
-exactly as recorded, without re-planning. :func:`compare_missions` then tells whether
+exactly as recorded, without re-planning; :func:`rerun_mission` does it with the
+performers of a mission file and records the re-run. :func:`compare_missions` then tells whether
 the re-run matches: same plan, same performers, same outcomes (and, optionally,
 durations within a tolerance). This turns any recorded run into a test.
 """
@@ -18,11 +19,12 @@ from __future__ import annotations
 import asyncio
 import logging
 from collections import Counter
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from plansys_bridge.clock import run
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.hub import messages as hm
 from plansys_bridge.hub.auction import ActionClient, AuctionPolicy, full_action_name
@@ -31,6 +33,9 @@ from plansys_bridge.hub.hub import Hub
 from . import msgs
 from .recorder import BRIDGE_PREFIX, PLAN_TOPIC, bag_topic
 from .rosbags_api import AnyReader, AnyReaderError, ReaderError, SerdeError, np
+
+if TYPE_CHECKING:
+    from plansys_bridge.mission_config import MissionConfig
 
 log = logging.getLogger(__name__)
 
@@ -330,6 +335,43 @@ async def replay_plan(
         return record
 
     return list(await asyncio.gather(*(run_item(i, item) for i, item in enumerate(plan.items))))
+
+
+def rerun_mission(
+    mission: MissionConfig,
+    recorded: RecordedMission | str | Path,
+    record_to: str | Path,
+    *,
+    performer_overrides: Mapping[str, Any] | None = None,
+) -> RecordedMission:
+    """Re-run a recorded plan with the performers of ``mission``, recorded to ``record_to``.
+
+    The performers, knowledge and clock are built from the mission file exactly as
+    ``plansys-bridge run`` builds them (``performer_overrides`` changes settings of
+    every performer entry, e.g. to try another rate); the plan is the recorded one,
+    replayed with :func:`replay_plan`. Returns the new recording, ready for
+    :func:`compare_missions`.
+    """
+    from plansys_bridge.mission import MissionSession, build_knowledge, make_clock
+    from plansys_bridge.pddl.parser import parse_domain_files
+
+    first = recorded if isinstance(recorded, RecordedMission) else read_mission(recorded)
+    plan = first.plan
+    if plan is None:
+        raise MissionBagError(f"{first.path}: the recording holds no plan to re-run")
+    config = mission.model_copy(update={"record": str(record_to)})
+    domain = parse_domain_files(config.domain_paths)
+    knowledge = build_knowledge(config, domain)
+    clock = make_clock(config)
+
+    async def rerun() -> None:
+        async with MissionSession(
+            config, domain, knowledge, clock, performer_overrides=dict(performer_overrides or {})
+        ) as session:
+            await replay_plan(session.hub, plan)
+
+    run(rerun(), clock)
+    return read_mission(record_to)
 
 
 def _info(

@@ -10,6 +10,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from plansys_bridge.clock import run
 from plansys_bridge.hub import messages as hm
 from plansys_bridge.hub.hub import Hub
+from plansys_bridge.mission_config import load_mission
 from plansys_bridge.monitoring import msgs
 from plansys_bridge.monitoring.recorder import MissionRecorder
 from plansys_bridge.monitoring.replay import (
@@ -19,6 +20,7 @@ from plansys_bridge.monitoring.replay import (
     compare_missions,
     read_mission,
     replay_plan,
+    rerun_mission,
 )
 from plansys_bridge.performers.base import PerformerContext
 from plansys_bridge.performers.simulated import SimulatedPerformer
@@ -257,3 +259,12 @@ def test_planned_plan_is_the_fallback(virtual_hub: Hub, tmp_path: Path) -> None:
     mission = read_mission(tmp_path / "run")
     assert mission.plan == PLAN and mission.topics == {"/plan": 1}
     assert mission.actions == [] and not mission.succeeded
+
+
+def test_rerun_needs_a_recorded_plan(virtual_hub: Hub, tmp_path: Path) -> None:
+    with MissionRecorder(virtual_hub, tmp_path / "empty", topics=()) as recorder:
+        recorder.record_pose("/robot/pose", 0.0, 1.0, 2.0)
+    mission = load_mission(Path(__file__).resolve().parents[2] / "configs" / "rosbag_replay.yaml")
+    with pytest.raises(MissionBagError, match="holds no plan"):
+        rerun_mission(mission, tmp_path / "empty", tmp_path / "rerun")
+    assert not (tmp_path / "rerun").exists()

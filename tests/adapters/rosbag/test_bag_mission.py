@@ -16,22 +16,14 @@ from mcap.reader import make_reader
 from rosbag_testdata import REPO
 from rosbags.highlevel import AnyReader
 
-from plansys_bridge.clock import run
-from plansys_bridge.mission import (
-    MissionReport,
-    MissionSession,
-    build_knowledge,
-    make_clock,
-    run_mission,
-)
+from plansys_bridge.mission import MissionReport, run_mission
 from plansys_bridge.mission_config import load_mission
 from plansys_bridge.monitoring.replay import (
     RecordedMission,
     compare_missions,
     read_mission,
-    replay_plan,
+    rerun_mission,
 )
-from plansys_bridge.pddl.parser import parse_domain_files
 
 CONFIG = REPO / "configs" / "rosbag_replay.yaml"
 RECORDED_DURATIONS = {
@@ -92,21 +84,7 @@ def test_recorded_mission_opens_with_rosbags_and_mcap(
 
 def _rerun(first: RecordedMission, bag: Path, **overrides: Any) -> RecordedMission:
     """Replay ``first``'s plan with the mission's performers (changed by ``overrides``)."""
-    assert first.plan is not None
-    plan = first.plan
-    mission = load_mission(CONFIG).model_copy(update={"record": str(bag)})
-    domain = parse_domain_files(mission.domain_paths)
-    knowledge = build_knowledge(mission, domain)
-    clock = make_clock(mission)
-
-    async def rerun() -> None:
-        async with MissionSession(
-            mission, domain, knowledge, clock, performer_overrides=overrides
-        ) as session:
-            await replay_plan(session.hub, plan)
-
-    run(rerun(), clock)
-    return read_mission(bag)
+    return rerun_mission(load_mission(CONFIG), first, bag, performer_overrides=overrides)
 
 
 def test_record_then_replay_gives_the_same_outcome(
