@@ -141,7 +141,8 @@ def read_mission(path: str | Path) -> RecordedMission:
             mission.topics = {name: info.msgcount for name, info in reader.topics.items()}
             has_bridge = BRIDGE_ACTIONS_TOPIC in mission.topics
             conns = [c for c in reader.connections if c.topic in wanted]
-            for conn, timestamp, raw in reader.messages(conns):
+            # (rosbags reads every topic when given no connection at all)
+            for conn, timestamp, raw in reader.messages(conns) if conns else ():
                 if conn.topic == ACTIONS_TOPIC and has_bridge:
                     continue  # the bridge topic carries the same messages with request ids
                 msg: Any = reader.deserialize(raw, conn.msgtype)
