@@ -5,7 +5,8 @@ behaves like a base controller: it decodes ``BASE_VelocityCmd`` and
 ``BASE_EStopCmd``, integrates unicycle kinematics under its own acceleration
 limits, and sends ``BASE_OdomPose``/``BASE_OdomTwist`` at 50 Hz and
 ``BASE_Status`` at 10 Hz. It enforces the command watchdog (commands that stop or
-repeat their alive counter while driving make it brake and set the watchdog bit),
+repeat their alive counter while a non-zero velocity is commanded make it brake and
+set the watchdog bit; after a zero command it needs no more),
 honours the e-stop (command or "button"), drains its battery, and can be told to
 misbehave: go silent, freeze its heartbeat counter, raise fault bits, put error
 frames or garbage on the bus.
@@ -370,7 +371,7 @@ class BaseDouble:
         if (
             self._last_command_time is not None
             and not self._watchdog_tripped
-            and (self._target != (0.0, 0.0) or self.model.moving)
+            and self._target != (0.0, 0.0)
             and now - self._last_command_time > cfg.watchdog_timeout
         ):
             self._watchdog_tripped = True

@@ -145,8 +145,13 @@ class BaseMonitor:
         heartbeat_timeout: float,
         odometry_timeout: float,
         error_frame_limit: int,
+        ignore_watchdog: bool = False,
     ) -> Problem | None:
-        """Why the base cannot be driven now, or None when all is well."""
+        """Why the base cannot be driven now, or None when all is well.
+
+        ``ignore_watchdog``: a latched watchdog bit is no problem (while idle: it only
+        says the base stopped when commands stopped; the next command clears it).
+        """
         if self.bus_errors > mark.bus_errors:
             return Problem(f"CAN bus error on {self.where}: {self.last_bus_error}")
         new_error_frames = self.error_frames - mark.error_frames
@@ -173,7 +178,7 @@ class BaseMonitor:
             return Problem(f"base fault: {', '.join(names)} (state {status.state.name})")
         if faults.estop or status.state is BaseState.ESTOP:
             return Problem("base e-stop active")
-        if faults.watchdog:
+        if faults.watchdog and not ignore_watchdog:
             return Problem(
                 "base command watchdog tripped: velocity commands stopped reaching the base",
                 transient=True,

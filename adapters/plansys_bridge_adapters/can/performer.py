@@ -22,6 +22,8 @@ predicate with hysteresis).
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -29,6 +31,7 @@ from typing import Any, ClassVar
 
 from plansys_bridge.clock import VirtualClock
 from plansys_bridge.errors import ConfigError, PlansysBridgeError
+from plansys_bridge.hub.messages import PerformerState
 from plansys_bridge.performers.base import (
     ActionFailed,
     ActionGoal,
@@ -104,6 +107,9 @@ class CanBasePerformer(ActionPerformer):
         self._battery_written: float | None = None
         self._battery_low: bool | None = None
         self._knowledge_errors: set[str] = set()
+        self._health_task: asyncio.Task[None] | None = None
+        self.base_problem: str | None = None
+        """Why the base cannot be driven while idle (None: it can); shown as FAILURE."""
 
     # -- construction -----------------------------------------------------------
 
@@ -153,8 +159,16 @@ class CanBasePerformer(ActionPerformer):
                 await self.double.stop()
                 self.double = None
             raise
+        self._health_task = asyncio.get_running_loop().create_task(
+            self._watch_health(), name=f"{self.node_name}-base-health"
+        )
 
     async def teardown(self) -> None:
+        if self._health_task is not None:
+            self._health_task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._health_task
+            self._health_task = None
         if self.client.is_open:
             try:
                 self._command(0.0, 0.0, enable=False)
@@ -374,6 +388,40 @@ class CanBasePerformer(ActionPerformer):
                     f"base did not confirm standstill within {safety.stop_timeout:g} s ({seen})"
                 )
             await self.clock.sleep(period)
+
+    async def _watch_health(self) -> None:
+        """While idle, report the base's state in the performer heartbeat.
+
+        A faulted, e-stopped or silent base turns the performer FAILURE (PlanSys2's
+        ActionPerformerStatus) until it recovers, so monitoring sees it before a plan
+        tries to use it. Actions are still accepted and fail with the reason.
+        """
+        mark = self.monitor.mark()
+        while True:
+            await asyncio.sleep(self.heartbeat_period)
+            safety = self.settings.safety
+            problem = self.monitor.problem(
+                self.clock.now(),
+                mark,
+                heartbeat_timeout=safety.heartbeat_timeout,
+                odometry_timeout=safety.odometry_timeout,
+                error_frame_limit=safety.error_frame_limit,
+                ignore_watchdog=True,
+            )
+            mark = self.monitor.mark()
+            if self.busy or not self.running:
+                continue
+            text = None if problem is None else problem.message
+            if text != self.base_problem:
+                if text is not None:
+                    _LOG.warning("%s: base unavailable: %s", self.node_name, text)
+                else:
+                    _LOG.info("%s: base available again", self.node_name)
+                self.base_problem = text
+            wanted = PerformerState.READY if text is None else PerformerState.FAILURE
+            if self.state != wanted:
+                self.state = wanted
+                self._publish_status()
 
     def _battery_to_knowledge(self, status: BaseStatus) -> None:
         battery = self.settings.battery

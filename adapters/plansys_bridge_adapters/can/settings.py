@@ -341,7 +341,7 @@ def parse_bus(value: object, key: str) -> BusConfig:
     if not isinstance(value, Mapping):
         raise ConfigError(f"must be a mapping, got {value!r}", key=key)
     allowed = ("interface", "channel", "bitrate", "reader", "poll_period", "send_timeout",
-               "options")
+               "reopen_period", "options")
     for item in value:
         if item not in allowed:
             raise ConfigError(f"unknown key (allowed: {', '.join(allowed)})", key=f"{key}.{item}")
@@ -366,8 +366,11 @@ def parse_bus(value: object, key: str) -> BusConfig:
         name: _positive(value.get(name, default), f"{key}.{name}")
         for name, default in (("poll_period", 0.005), ("send_timeout", 0.05))
     }
+    reopen = value.get("reopen_period", 1.0)
+    reopen_period = None if reopen is None else _positive(reopen, f"{key}.reopen_period")
     return BusConfig(
         interface=interface,
+        reopen_period=reopen_period,
         channel=str(channel),
         bitrate=bitrate,
         reader=reader,

@@ -17,7 +17,7 @@ from plansys_bridge.clock import WallClock, run
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome, AuctionPolicy
 from plansys_bridge.hub.hub import Hub
-from plansys_bridge.hub.messages import PerformerState
+from plansys_bridge.hub.messages import PerformerState, Topics
 from plansys_bridge.hub.transport import InProcessTransport
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.pddl.parser import parse_domain
@@ -192,7 +192,10 @@ def test_every_fault_ends_the_action_and_stops_the_base(
         assert rig.clock.now() - failed_at < 0.8
         await settle(rig, 1.5)
         assert not rig.double.model.moving
-        assert rig.performer.state is PerformerState.READY
+        # Idle again; a base that is still faulted shows as FAILURE in the heartbeat.
+        lasting = fault not in ("error frames", "interface gone")
+        wanted = PerformerState.FAILURE if lasting else PerformerState.READY
+        assert rig.performer.state is wanted, rig.performer.base_problem
 
     play(hub, channel, scenario)
 
@@ -355,6 +358,7 @@ def test_simulated_base_from_the_config(hub: Hub, channel: str) -> None:
         ({"locations": {"a": {"x": 1}}}, "performer.locations.a.y"),
         ({"bus": {"interface": "virtual", "chanel": "x"}}, "performer.bus.chanel"),
         ({"bus": {"reader": "thread"}}, "performer.bus.reader"),
+        ({"bus": {"reopen_period": 0}}, "performer.bus.reopen_period"),
         ({"safety": {"heartbeat_timout": 1}}, "performer.safety.heartbeat_timout"),
         ({"safety": {"command_rate": "fast"}}, "performer.safety.command_rate"),
         ({"controller": {"max_linear": -1}}, "performer.controller.max_linear"),
@@ -425,3 +429,27 @@ def test_interface_reopens_after_a_driver_error(hub: Hub, channel: str) -> None:
         assert rig.performer.client.counters.reopens == 1
 
     play(hub, channel, scenario, safety={"startup_timeout": 3.0})
+
+
+def test_idle_performer_reports_an_unavailable_base_as_failure(hub: Hub, channel: str) -> None:
+    states: list[PerformerState] = []
+
+    async def scenario(rig: Rig) -> None:
+        rig.hub.subscribe(Topics.PERFORMERS_STATUS, lambda m: states.append(m.state))  # type: ignore[attr-defined]
+        await settle(rig, 1.5)
+        assert rig.performer.state is PerformerState.READY
+        rig.double.press_estop()
+        await settle(rig, 1.5)
+        assert rig.performer.state is PerformerState.FAILURE
+        assert rig.performer.base_problem == "base e-stop active"
+        # An action is still taken, and fails saying why; the state stays FAILURE after.
+        outcome = await move(rig, "kitchen")
+        assert "base e-stop active" in outcome.status
+        await settle(rig, 1.5)
+        assert rig.performer.state is PerformerState.FAILURE
+        rig.double.press_estop(False)
+        await settle(rig, 1.5)
+        assert rig.performer.state is PerformerState.READY and rig.performer.base_problem is None
+
+    play(hub, channel, scenario)
+    assert PerformerState.FAILURE in states and states[-1] is PerformerState.NOT_READY
