@@ -21,6 +21,7 @@ executor); when one is missing the terminal says so instead of failing.
 
 from __future__ import annotations
 
+import contextlib
 import shlex
 import sys
 from collections.abc import Callable, Collection, Iterable
@@ -120,18 +121,32 @@ class Terminal:
         """Read commands until ``quit`` or end of input; returns an exit code.
 
         The prompt is shown only when the input is a terminal (so piped command files
-        produce clean output).
+        produce clean output); on a terminal, line editing and history are on and
+        Ctrl-C abandons the line being typed instead of ending the session.
         """
         source = inp if inp is not None else sys.stdin
+        interactive = source is sys.stdin and source.isatty()
         if prompt is None:
             prompt = "> " if source.isatty() else ""
+        if interactive:
+            with contextlib.suppress(ImportError):
+                import readline  # noqa: F401  (enables editing and history for input())
         while not self.finished:
-            if prompt:
-                self.out.write(prompt)
-                self.out.flush()
-            line = source.readline()
-            if not line:
-                break
+            if interactive:
+                try:
+                    line = input(prompt)
+                except EOFError:
+                    break
+                except KeyboardInterrupt:
+                    self.out.write("\n")
+                    continue
+            else:
+                if prompt:
+                    self.out.write(prompt)
+                    self.out.flush()
+                line = source.readline()
+                if not line:
+                    break
             result = self.execute_line(line)
             if result:
                 self.out.write(result + "\n")
