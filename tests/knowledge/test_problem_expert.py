@@ -547,3 +547,74 @@ def test_transactions_are_all_or_nothing(
     assert dict(pe.state().fluents) == {
         (f.fluent.name, f.fluent.args): f.value for f in pe.get_functions()
     }
+
+
+_TOKENS = st.sampled_from(
+    [
+        "(",
+        ")",
+        "(",
+        ")",
+        "and",
+        "or",
+        "not",
+        "exists",
+        "forall",
+        "imply",
+        "=",
+        ">",
+        "-",
+        "*",
+        "robot_at",
+        "person_at",
+        "room_distance",
+        "leia",
+        "jack",
+        "kitchen",
+        "bedroom",
+        "hall",
+        "?r",
+        "?x",
+        "robot",
+        "room",
+        "3",
+        "-1.5",
+        "1e3",
+        "(and)",
+        ":goal",
+        ";",
+        "\n",
+    ]
+)
+_texts = st.lists(_TOKENS, max_size=14).map(" ".join) | st.text(max_size=30)
+
+
+@settings(
+    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    text=_texts,
+    method=st.sampled_from(
+        [
+            "set_goal",
+            "add_predicate",
+            "remove_predicate",
+            "set_function",
+            "evaluate",
+            "exist_predicate",
+        ]
+    ),
+)
+def test_any_text_is_refused_cleanly_or_accepted(
+    simple: ProblemExpert, text: str, method: str
+) -> None:
+    """Whatever the text, only the project's own errors come out, and a refused
+    change leaves the knowledge as it was."""
+    pe = ProblemExpert(simple.domain_expert)
+    pe.load_problem(read(PROBLEM_EXPERT_PDDL / "problem_simple_1.pddl"))
+    before, version = _snapshot(pe), pe.version
+    goal = pe.get_goal()
+    try:
+        getattr(pe, method)(text)
+    except PlansysBridgeError:
+        assert _snapshot(pe) == before and pe.version == version and pe.get_goal() == goal
