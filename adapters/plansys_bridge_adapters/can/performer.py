@@ -246,8 +246,8 @@ class CanBasePerformer(ActionPerformer):
                 raise ActionFailed(f"{goal.full_name}: {self.node_name} has no motion for it")
             return None
         if motion.robot_arg is not None and strict:
-            robot = goal.arguments[motion.robot_arg] if motion.robot_arg < len(goal.arguments) \
-                else None
+            args = goal.arguments
+            robot = args[motion.robot_arg] if motion.robot_arg < len(args) else None
             if robot != self.robot:
                 raise ActionFailed(
                     f"{goal.full_name}: argument {motion.robot_arg} is {robot!r}, "
