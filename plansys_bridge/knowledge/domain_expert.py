@@ -87,11 +87,11 @@ class DomainExpert:
 
     # ------------------------------------------------------------------ constants
 
-    def get_constants(self, type_name: str | None = None) -> list[str]:
-        """Constant names, optionally only those usable as ``type_name``."""
-        if type_name is None:
+    def get_constants(self, type: str | None = None) -> list[str]:
+        """Constant names, optionally only those usable as ``type``."""
+        if type is None:
             return list(self._constants)
-        return self.types.objects_of_type(type_name.lower(), self._constants)
+        return self.types.objects_of_type(type.lower(), self._constants)
 
     def constant_type(self, name: str) -> str | None:
         return self._constants.get(name.lower())

@@ -346,13 +346,13 @@ class ProblemExpert:
 
     # ================================================================ instances
 
-    def add_instance(self, name: str, type_name: str) -> bool:
+    def add_instance(self, name: str, type: str) -> bool:
         """Add an object; False when it already exists with that type."""
-        obj, typ = name.strip().lower(), type_name.strip().lower()
+        obj, typ = name.strip().lower(), type.strip().lower()
         if not _NAME.match(obj):
             raise KnowledgeError(f"instance {name!r}: not a valid PDDL name")
         if not self.domain_expert.is_valid_type(typ):
-            raise KnowledgeError(f"instance {obj}: unknown type {type_name!r}")
+            raise KnowledgeError(f"instance {obj}: unknown type {type!r}")
         with self._change("add_instance"):
             if not self._put_instance(obj, typ):
                 return False
