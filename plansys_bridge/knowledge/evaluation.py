@@ -18,6 +18,8 @@ Why it is built this way:
 
 from __future__ import annotations
 
+import contextlib
+import itertools
 from collections import OrderedDict
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 
@@ -146,7 +148,7 @@ class Evaluator:
         self._strata = self._stratify()
         self._free_cache: dict[int, tuple[Condition, frozenset[str]]] = {}
         self._rename_cache: dict[int, tuple[Exists, _VarTypes, list[Condition]]] = {}
-        self._fresh = 0
+        self._fresh = itertools.count(1)  # next() is atomic: evaluators are shared by threads
         self._variant_cache: dict[tuple[str, ...], list[tuple[DerivedPredicate, Condition]]] = {}
         self._accept_cache: dict[tuple[str, ...], frozenset[str] | None] = {}
         self._position_index: OrderedDict[
@@ -553,8 +555,8 @@ class Evaluator:
         entry = self._rename_cache.get(id(cond))
         if entry is not None and entry[0] is cond:
             return entry[1], entry[2]
-        self._fresh += 1
-        mapping = {v.name: f"{v.name}#{self._fresh}" for v in cond.variables}
+        suffix = next(self._fresh)
+        mapping = {v.name: f"{v.name}#{suffix}" for v in cond.variables}
         extra: _VarTypes = {mapping[v.name]: self._accepted(v.types) for v in cond.variables}
         body = conjuncts(substitute_condition(cond.body, mapping))
         if len(self._rename_cache) > _CACHE_LIMIT:
@@ -625,14 +627,16 @@ class Evaluator:
         key = (id(tuples), position)
         entry = self._position_index.get(key)
         if entry is not None and entry[0] is tuples:
-            self._position_index.move_to_end(key)
+            with contextlib.suppress(KeyError):  # another thread may have evicted it
+                self._position_index.move_to_end(key)
             return entry[1]
         index: dict[str, list[Args]] = {}
         for args in tuples:
             index.setdefault(args[position], []).append(args)
         self._position_index[key] = (tuples, index)
         if len(self._position_index) > 512:
-            self._position_index.popitem(last=False)
+            with contextlib.suppress(KeyError):
+                self._position_index.popitem(last=False)
         return index
 
     # ============================================================ derived predicates

@@ -399,3 +399,26 @@ def test_numeric_expressions_like_plansys2(
 ) -> None:
     s = world(fluents={("moves", ()): value})
     assert ev.holds(cond(ev, text), s) is expected
+
+
+def test_one_evaluator_shared_by_threads(ev: Evaluator) -> None:
+    """The executor, the validator and the knowledge share an evaluator across threads."""
+    import threading
+
+    links = [Atom("link", (a, b)) for a, b in (("hall", "lab"), ("lab", "roof"), ("roof", "base"))]
+    query = cond(
+        ev, "(forall (?p - place) (imply (reach hall ?p) (exists (?q - place) (link ?q ?p))))"
+    )
+    results: list[bool] = []
+
+    def work() -> None:
+        for i in range(60):
+            s = world(*(str(a) for a in links[: 1 + i % 3]))
+            results.append(ev.holds(query, s) and ev.holds(Atom("reach", ("hall", "lab")), s))
+
+    threads = [threading.Thread(target=work) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert results == [True] * 240
