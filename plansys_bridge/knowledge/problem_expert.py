@@ -72,6 +72,8 @@ class KnowledgeChange:
     removed_fluents: frozenset[FluentKey] = frozenset()
     goal_changed: bool = False
     goal: Condition | None = None
+    state: State | None = field(default=None, compare=False, repr=False)
+    """The snapshot right after the change (read it without taking the lock)."""
 
 
 @dataclass
@@ -178,6 +180,7 @@ class ProblemExpert:
             removed_fluents=removed_fluents,
             goal_changed=goal_changed,
             goal=self._goal,
+            state=self._state,
         )
         for callback in list(self._subscribers):
             try:

@@ -341,6 +341,7 @@ def test_subscribers_get_one_change_per_operation(simple: ProblemExpert) -> None
     simple.add_predicate("(robot_at r2d2 kitchen)")
     assert [c.reason for c in seen] == ["add_instance", "add_instance", "add_predicate"]
     assert seen[-1].added_facts == {Atom("robot_at", ("r2d2", "kitchen"))}
+    assert seen[-1].state == simple.state()
     assert [c.version for c in seen] == [1, 2, 3]
 
     simple.remove_instance("kitchen")
