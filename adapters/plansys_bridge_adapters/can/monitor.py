@@ -86,6 +86,7 @@ class BaseMonitor:
         self.last_bus_error: Exception | None = None
         self.foreign_commands = 0
         self.status_callbacks: list[Callable[[BaseStatus], None]] = []
+        self.pose_callbacks: list[Callable[[OdomPose], None]] = []
 
     # -- FrameListener ------------------------------------------------------------
 
@@ -93,6 +94,8 @@ class BaseMonitor:
         now = self.clock.now()
         if isinstance(frame, OdomPose):
             self.pose, self.pose_time = frame, now
+            for pose_callback in self.pose_callbacks:
+                pose_callback(frame)
         elif isinstance(frame, OdomTwist):
             self.twist, self.twist_time = frame, now
         elif isinstance(frame, BaseStatus):

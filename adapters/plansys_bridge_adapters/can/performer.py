@@ -41,7 +41,7 @@ from plansys_bridge.performers.base import (
 
 from .bus import BusSendError, CanBusClient
 from .controller import Path, PathFollower, Pose2D
-from .dbc import BaseStatus, EStopCommand, MobileBaseDbc, VelocityCommand
+from .dbc import BaseStatus, EStopCommand, MobileBaseDbc, OdomPose, VelocityCommand
 from .double import BaseDouble
 from .monitor import BaseMonitor, Mark
 from .settings import CanBaseSettings, Location, parse_settings
@@ -73,6 +73,8 @@ class CanBasePerformer(ActionPerformer):
             "battery",
             "simulate_base",
             "feedback_period",
+            "record_topic",
+            "record_period",
         }
     )
 
@@ -99,6 +101,7 @@ class CanBasePerformer(ActionPerformer):
         self.dbc = MobileBaseDbc.load(settings.dbc)
         self.monitor = BaseMonitor(self.clock, settings.bus.describe())
         self.monitor.status_callbacks.append(self._battery_to_knowledge)
+        self.monitor.pose_callbacks.append(self._record_pose)
         self.client = CanBusClient(settings.bus, self.dbc, self.monitor)
         self.double: BaseDouble | None = None
         """The simulated base started by ``simulate_base`` (None on a real bus)."""
@@ -108,6 +111,7 @@ class CanBasePerformer(ActionPerformer):
         self._battery_low: bool | None = None
         self._knowledge_errors: set[str] = set()
         self._health_task: asyncio.Task[None] | None = None
+        self._next_record = -math.inf
         self.base_problem: str | None = None
         """Why the base cannot be driven while idle (None: it can); shown as FAILURE."""
 
@@ -422,6 +426,24 @@ class CanBasePerformer(ActionPerformer):
             if self.state != wanted:
                 self.state = wanted
                 self._publish_status()
+
+    def _record_pose(self, pose: OdomPose) -> None:
+        """Odometry into the mission bag (when one is recorded), every ``record_period``."""
+        recorder = self.context.recorder
+        record_pose = getattr(recorder, "record_pose", None)
+        if record_pose is None or not getattr(recorder, "recording", True):
+            return
+        now = self.clock.now()
+        if now < self._next_record:
+            return
+        self._next_record = now + self.settings.record_period
+        try:
+            record_pose(self.settings.record_topic, now, pose.x, pose.y, 0.0, pose.yaw,
+                        frame_id="odom")
+        except PlansysBridgeError as exc:
+            # A full disk must not stop the robot; the bag just loses the poses.
+            _LOG.error("%s: recording poses stopped: %s", self.node_name, exc)
+            self._next_record = math.inf
 
     def _battery_to_knowledge(self, status: BaseStatus) -> None:
         battery = self.settings.battery

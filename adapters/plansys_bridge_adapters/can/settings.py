@@ -13,6 +13,7 @@ A performer entry looks like::
       safety: {heartbeat_timeout: 0.5}
       battery: {function: battery, low_predicate: battery_low, low_below: 20}
       simulate_base: {x: 0.0, y: 0.0}   # virtual bus only: run the base double
+      record_topic: /r2d2/pose          # odometry into the mission bag (every record_period)
 
 Every mistake is a :class:`ConfigError` naming its key (``performers[1].safety.
 heartbeat_timeout``) and, for the locations file, the file.
@@ -107,6 +108,9 @@ class CanBaseSettings:
     battery: BatterySettings | None = None
     simulate_base: BaseDoubleConfig | None = None
     feedback_period: float = 0.2
+    record_topic: str = ""
+    """Bag topic of the odometry pose when the mission is recorded ("": /<robot>/pose)."""
+    record_period: float = 0.1
 
 
 def _type_ok(value: object, hint: object) -> bool:
@@ -433,6 +437,11 @@ def parse_settings(
         )
     )
     feedback = _positive(settings.get("feedback_period", 0.2), f"{key}.feedback_period")
+    record_period = _positive(settings.get("record_period", 0.1), f"{key}.record_period")
+    record_topic = settings.get("record_topic") or f"/{robot}/pose"
+    if not isinstance(record_topic, str) or not record_topic.startswith("/"):
+        raise ConfigError(f"must be a topic name starting with '/', got {record_topic!r}",
+                          key=f"{key}.record_topic")
     parsed = CanBaseSettings(
         robot=robot,
         motions=motions,
@@ -446,5 +455,7 @@ def parse_settings(
             settings.get("simulate_base"), bus, f"{key}.simulate_base"
         ),
         feedback_period=feedback,
+        record_topic=record_topic,
+        record_period=record_period,
     )
     return parsed, specs

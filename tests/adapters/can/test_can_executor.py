@@ -16,6 +16,7 @@ from typing import Any
 
 from can_rig import new_channel
 from plansys_bridge_adapters.can.performer import CanBasePerformer
+from rosbags.highlevel import AnyReader
 
 from plansys_bridge.clock import run
 from plansys_bridge.execution.executor import Executor
@@ -24,6 +25,7 @@ from plansys_bridge.execution.results import ExecutionResult
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.messages import ActionStatus
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
+from plansys_bridge.mission import build_knowledge, run_mission
 from plansys_bridge.mission_config import MissionConfig, load_mission
 from plansys_bridge.pddl.model import Domain
 from plansys_bridge.pddl.parser import parse_domain_files
@@ -45,17 +47,7 @@ class Mission:
 def load() -> Mission:
     config = load_mission(MISSION)
     domain = parse_domain_files(config.domain_paths)
-    knowledge = ProblemExpert(domain)
-    with knowledge.transaction():
-        for name, type_name in config.knowledge.instances.items():
-            knowledge.add_instance(name, type_name)
-        for fact in config.knowledge.predicates:
-            knowledge.add_predicate(fact)
-        for value in config.knowledge.functions:
-            knowledge.set_function(value)
-        assert config.goal is not None
-        knowledge.set_goal(config.goal)
-    return Mission(config, domain, knowledge)
+    return Mission(config, domain, build_knowledge(config, domain))
 
 
 Body = Callable[[Executor, dict[str, CanBasePerformer]], Awaitable[ExecutionResult]]
@@ -162,3 +154,20 @@ def test_low_battery_frame_halts_the_move_through_the_knowledge(hub: Hub) -> Non
     assert len(halted) == 1, "\n".join(
         f"{a.text} {a.status.name} {a.message}" for a in result.actions)
     assert stops == [False]  # the halted move was cancelled on the base, which stopped
+
+
+def test_mission_runner_records_the_bases_odometry(tmp_path: Path) -> None:
+    """``plansys-bridge run configs/can_base.yaml --record``, as the CLI runs it."""
+    bag = tmp_path / "run"
+    report = run_mission(load_mission(MISSION).model_copy(update={"record": str(bag)}), out=None)
+    assert report.success, report.summary()
+    with AnyReader([bag]) as reader:
+        conns = [c for c in reader.connections if c.topic == "/r2d2/pose"]
+        assert conns and conns[0].msgtype == "geometry_msgs/msg/PoseStamped"
+        poses: list[Any] = [reader.deserialize(raw, conns[0].msgtype)
+                            for _, _, raw in reader.messages(conns)]
+    # 10 poses per mission second over a run of about 25 s, ending back at the dock.
+    assert len(poses) > 150
+    last = poses[-1]
+    assert last.header.frame_id == "odom"
+    assert abs(last.pose.position.x) < 0.05 and abs(last.pose.position.y) < 0.05
