@@ -153,10 +153,21 @@ class ProblemExpert:
                     continue
                 added.update(Atom(pred, a) for a in after - before)
                 removed.update(Atom(pred, a) for a in before - after)
-        changed_fluents = {k: v for k, v in self._fluents.items() if snap.fluents.get(k) != v}
-        removed_fluents = frozenset(k for k in snap.fluents if k not in self._fluents)
-        added_instances = {k: v for k, v in self._instances.items() if snap.instances.get(k) != v}
-        removed_instances = {k: v for k, v in snap.instances.items() if self._instances.get(k) != v}
+        # Untouched tables are shared between the snapshots: skip comparing them.
+        changed_fluents: dict[FluentKey, float] = {}
+        removed_fluents: frozenset[FluentKey] = frozenset()
+        if not old.same_fluents(new):
+            changed_fluents = {k: v for k, v in self._fluents.items() if snap.fluents.get(k) != v}
+            removed_fluents = frozenset(k for k in snap.fluents if k not in self._fluents)
+        added_instances: dict[str, str] = {}
+        removed_instances: dict[str, str] = {}
+        if not old.same_objects(new):
+            added_instances = {
+                k: v for k, v in self._instances.items() if snap.instances.get(k) != v
+            }
+            removed_instances = {
+                k: v for k, v in snap.instances.items() if self._instances.get(k) != v
+            }
         goal_changed = snap.goal != self._goal
         if not (
             added

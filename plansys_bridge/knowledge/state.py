@@ -104,6 +104,14 @@ class State:
         """The fluent's value, or None when it is undefined."""
         return self._fluents.get((name, args))
 
+    def same_fluents(self, other: State) -> bool:
+        """True when both states share one fluent table (no fluent changed between)."""
+        return self._fluents is other._fluents
+
+    def same_objects(self, other: State) -> bool:
+        """True when both states share one object table (no object changed between)."""
+        return self._objects is other._objects
+
     def __len__(self) -> int:
         return sum(len(t) for t in self._index.values())
 
