@@ -67,7 +67,9 @@ async def can_rig(
 ) -> AsyncIterator[Rig]:
     """Base double + CAN performer on ``channel``, both started; stopped on exit."""
     await hub.start()
-    base = BaseDouble(hub.clock, BusConfig(channel=channel), double)
+    bus = entry.get("bus", {"interface": "virtual", "channel": channel})
+    base = BaseDouble(hub.clock, BusConfig(interface=bus["interface"], channel=bus["channel"]),
+                      double)
     await base.start()
     context = PerformerContext(hub=hub, clock=hub.clock, knowledge=knowledge)  # type: ignore[arg-type]
     [performer] = CanBasePerformer.from_config(base_entry(channel, **entry), context)
