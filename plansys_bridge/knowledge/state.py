@@ -32,7 +32,7 @@ class State:
     returns a new state. ``fluents`` and ``objects`` are read-only views.
     """
 
-    __slots__ = ("_cache", "_facts", "_fluents", "_index", "_object_cache", "_objects")
+    __slots__ = ("_cache", "_facts", "_flat", "_fluents", "_index", "_object_cache", "_objects")
 
     def __init__(
         self,
@@ -45,7 +45,13 @@ class State:
             grouped.setdefault(atom.predicate, set()).add(atom.args)
         self._index: dict[str, frozenset[Args]] = {p: frozenset(a) for p, a in grouped.items()}
         self._facts: frozenset[Atom] | None = None
-        self._fluents: dict[FluentKey, float] = {k: float(v) for k, v in (fluents or {}).items()}
+        # Fluents are grouped by function name like facts by predicate, so a numeric
+        # effect copies only its function's table.
+        buckets: dict[str, dict[Args, float]] = {}
+        for (name, args), value in (fluents or {}).items():
+            buckets.setdefault(name, {})[args] = float(value)
+        self._fluents: dict[str, dict[Args, float]] = buckets
+        self._flat: dict[FluentKey, float] | None = None
         self._objects: dict[str, str] = dict(objects or {})
         self._cache: dict[Any, Any] = {}
         self._object_cache: dict[Any, Any] = {}
@@ -54,7 +60,7 @@ class State:
     def _build(
         cls,
         index: dict[str, frozenset[Args]],
-        fluents: dict[FluentKey, float],
+        fluents: dict[str, dict[Args, float]],
         objects: dict[str, str],
         object_cache: dict[Any, Any],
     ) -> State:
@@ -62,6 +68,7 @@ class State:
         state._index = index
         state._facts = None
         state._fluents = fluents
+        state._flat = None
         state._objects = objects
         state._cache = {}
         state._object_cache = object_cache
@@ -80,7 +87,13 @@ class State:
 
     @property
     def fluents(self) -> Mapping[FluentKey, float]:
-        return MappingProxyType(self._fluents)
+        if self._flat is None:
+            self._flat = {
+                (name, args): value
+                for name, table in self._fluents.items()
+                for args, value in table.items()
+            }
+        return MappingProxyType(self._flat)
 
     @property
     def objects(self) -> Mapping[str, str]:
@@ -102,7 +115,8 @@ class State:
 
     def value(self, name: str, args: Args = ()) -> float | None:
         """The fluent's value, or None when it is undefined."""
-        return self._fluents.get((name, args))
+        table = self._fluents.get(name)
+        return None if table is None else table.get(args)
 
     def same_fluents(self, other: State) -> bool:
         """True when both states share one fluent table (no fluent changed between)."""
@@ -163,11 +177,18 @@ class State:
         new_fluents = self._fluents
         if fluents or removed:
             new_fluents = dict(self._fluents)
-            for key in removed:
-                new_fluents.pop(key, None)
-            if fluents:
-                for key, value in fluents.items():
-                    new_fluents[key] = float(value)
+            copied: set[str] = set()
+            for (name, args), value in [*((k, None) for k in removed), *(fluents or {}).items()]:
+                if name not in copied:
+                    new_fluents[name] = dict(new_fluents.get(name, {}))
+                    copied.add(name)
+                if value is None:
+                    new_fluents[name].pop(args, None)
+                else:
+                    new_fluents[name][args] = float(value)
+            for name in copied:
+                if not new_fluents[name]:
+                    del new_fluents[name]
         if objects is None:
             new_objects, object_cache = self._objects, self._object_cache
         else:
@@ -191,5 +212,6 @@ class State:
 
     def __repr__(self) -> str:
         return (
-            f"State({len(self)} facts, {len(self._fluents)} fluents, {len(self._objects)} objects)"
+            f"State({len(self)} facts, {sum(len(t) for t in self._fluents.values())} fluents, "
+            f"{len(self._objects)} objects)"
         )
