@@ -119,11 +119,25 @@ class ProblemExpert:
         self._state = snap.state
 
     @contextmanager
-    def _change(self, reason: str) -> Iterator[None]:
-        """Run a change all-or-nothing; notify once when the outermost block ends."""
+    def _change(self, reason: str, *, steps: bool = False) -> Iterator[None]:
+        """Run a change all-or-nothing; notify once when the outermost block ends.
+
+        Single operations validate everything before they touch anything, so inside
+        a transaction they need no snapshot of their own; ``steps=True`` marks one
+        that mutates as it goes (a whole problem), which is then undone on its own
+        when it fails, even if the surrounding transaction carries on.
+        """
         with self._lock:
             if self._depth:
-                yield
+                if not steps:
+                    yield
+                    return
+                inner = self._snapshot()
+                try:
+                    yield
+                except BaseException:
+                    self._restore(inner)
+                    raise
                 return
             snap = self._snapshot()
             self._depth = 1
@@ -139,7 +153,7 @@ class ProblemExpert:
     @contextmanager
     def transaction(self) -> Iterator[ProblemExpert]:
         """Several changes as one: all applied or none, one notification."""
-        with self._change("transaction"):
+        with self._change("transaction", steps=True):
             yield self
 
     def _notify(self, snap: _Snapshot, reason: str) -> None:
@@ -567,7 +581,7 @@ class ProblemExpert:
             raise KnowledgeError(
                 f"{where}: problem is for domain {problem.domain_name!r}, not {self.domain.name!r}"
             )
-        with self._change("load_problem"):
+        with self._change("load_problem", steps=True):
             if replace:
                 self._clear()
             # One state update for the whole problem: adding facts one by one would

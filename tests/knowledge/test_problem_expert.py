@@ -619,3 +619,22 @@ def test_any_text_is_refused_cleanly_or_accepted(
         getattr(pe, method)(text)
     except PlansysBridgeError:
         assert _snapshot(pe) == before and pe.version == version and pe.get_goal() == goal
+
+
+def test_failed_load_inside_a_transaction_is_undone_alone(simple: ProblemExpert) -> None:
+    """A refused problem inside a transaction that goes on leaves no half of itself."""
+    problem = parse_problem(read(PROBLEM_EXPERT_PDDL / "problem_simple_1.pddl"), simple.domain)
+    from dataclasses import replace
+
+    broken = replace(problem, init=(*problem.init, Atom("robot_at", ("m1", "kitchen"))))
+    with simple.transaction() as pe:
+        pe.add_instance("r2d2", "robot")
+        with pytest.raises(KnowledgeError):
+            pe.load(broken)
+        with pytest.raises(KnowledgeError), pe.transaction():  # a nested transaction too
+            pe.add_instance("c3po", "robot")
+            raise KnowledgeError("changed my mind")
+        pe.add_instance("kitchen", "room")
+    assert simple.get_instances() == {"r2d2": "robot", "kitchen": "room"}
+    assert simple.state().objects == {"r2d2": "robot", "kitchen": "room"}
+    assert simple.get_predicates() == []
