@@ -339,5 +339,7 @@ def test_cli_mission_runs_plans_with_its_performers(tmp_path: Path) -> None:
     assert "(move leia kitchen dinning)" in last and "(connected kitchen dinning)" in last
 
 
-def test_cli_needs_domain_or_mission() -> None:
+def test_cli_needs_domain_or_mission(tmp_path: Path) -> None:
     assert terminal_cmd.run(_cli_args(), io.StringIO(""), io.StringIO()) == 2
+    missing = _cli_args(str(SIMPLE_DOMAIN), "--problem", str(tmp_path / "nope.pddl"))
+    assert terminal_cmd.run(missing, io.StringIO(""), io.StringIO()) == 2

@@ -108,7 +108,12 @@ def run(args: argparse.Namespace, stdin: TextIO | None = None, stdout: TextIO | 
         problem_expert = ProblemExpert(domain_expert)
     if args.problem:
         path = Path(args.problem)
-        problem_expert.load_problem(path.read_text(encoding="utf-8"), filename=str(path))
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as exc:
+            print(f"error: {path}: {exc.strerror}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        problem_expert.load_problem(text, filename=str(path))
 
     terminal = Terminal(
         domain_expert,
