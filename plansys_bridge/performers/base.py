@@ -239,6 +239,9 @@ class ActionPerformer(ABC):
             self._heartbeat_timer = None
         self.state = PerformerState.NOT_READY
         self._publish_status()
+        # Let the loop deliver the NOT_READY status (and whatever was queued before it)
+        # before returning, so "stopped" also means "said so".
+        await asyncio.sleep(0)
         await self.teardown()
 
     async def __aenter__(self) -> ActionPerformer:
