@@ -7,12 +7,13 @@ from pathlib import Path
 
 import pytest
 import tasks
+from planning_corpus import CORPUS
 
 from plansys_bridge.cli import plan_cmd
 from plansys_bridge.errors import PddlError
 from plansys_bridge.planning.plan import parse_plan
 
-COOKING = Path("/work/shared/fixtures/plansys2/plansys2_cooking_experiment/pddl")
+COOKING = (CORPUS or Path("/nonexistent")) / "plansys2_cooking_experiment" / "pddl"
 
 
 def run(argv: list[str]) -> int:
