@@ -349,12 +349,13 @@ class ProblemExpert:
 
     # ================================================================ parsing helpers
 
-    def _atom(self, fact: Atom | str) -> Atom:
+    def _atom(self, fact: Atom | str, *, known_objects: bool = True) -> Atom:
         if isinstance(fact, Atom):
             return fact
         from plansys_bridge.pddl.parser import parse_atom
 
-        return parse_atom(fact, self.domain, objects=self.get_instances())
+        objects = self.get_instances() if known_objects else None
+        return parse_atom(fact, self.domain, objects=objects)
 
     def _fluent_value(self, fv: FluentValue | str) -> FluentValue:
         if isinstance(fv, FluentValue):
@@ -463,8 +464,9 @@ class ProblemExpert:
             return True
 
     def exist_predicate(self, fact: Atom | str) -> bool:
-        """True when the fact holds (derived predicates are evaluated)."""
-        atom = self._atom(fact)
+        """True when the fact holds (derived predicates are evaluated); a fact about
+        an unknown object simply does not hold."""
+        atom = self._atom(fact, known_objects=False)
         atom = Atom(atom.predicate.lower(), tuple(a.lower() for a in atom.args))
         with self._lock:
             if self.domain_expert.is_derived(atom.predicate):

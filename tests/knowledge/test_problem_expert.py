@@ -188,6 +188,7 @@ def test_add_problem(simple: ProblemExpert) -> None:
         assert simple.exist_instance(name)
     for name in ("r2d2", "hallway", "m2"):
         assert not simple.exist_instance(name)
+    assert not simple.exist_predicate("(robot_at leia hallway)")
     assert simple.exist_predicate("(robot_at leia kitchen)")
     assert simple.exist_predicate("(person_at jack bedroom)")
     assert simple.get_goal() == parse_condition("(and (robot_talk leia m1 jack))", simple.domain)
