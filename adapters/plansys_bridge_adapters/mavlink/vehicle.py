@@ -160,6 +160,8 @@ class MavlinkVehicle:
             target=self._read_loop, name=f"mavlink-reader {self.url}", daemon=True
         )
         self._reader.start()
+        # Our heartbeat first: over udpout the vehicle learns our address from it.
+        self._tasks.append(loop.create_task(self._gcs_heartbeat(), name=f"gcs-hb {self.url}"))
         try:
             await self.wait_for(
                 lambda: self.target_system != 0,
@@ -170,7 +172,6 @@ class MavlinkVehicle:
             await self.close()
             raise
         self._connected = True
-        self._tasks.append(loop.create_task(self._gcs_heartbeat(), name=f"gcs-hb {self.url}"))
         self._tasks.append(loop.create_task(self._watchdog(), name=f"watchdog {self.url}"))
         try:
             await self.request_telemetry(self.settings.telemetry_hz)

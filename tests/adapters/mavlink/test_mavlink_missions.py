@@ -64,30 +64,53 @@ def test_single_vehicle_missions() -> None:
         assert report.success, f"{name}: {report.summary()}"
 
 
-def test_failsafe_mid_mission_fails_cleanly_with_the_reason() -> None:
-    with VehicleDouble("copter", speedup=SPEEDUP, ekf_delay=4.0) as double:
+def copter_mission_with_fault(inject: Any, max_replans: int) -> tuple[str, MissionReport]:
+    """Run the copter mission on a double of ours; ``inject(double)`` 20 m into the first leg."""
+    # slow cruise (60 m take 0.75 s of wall time) so the fault lands mid-flight
+    with VehicleDouble("copter", speedup=SPEEDUP, ekf_delay=4.0, cruise_speed=2.0) as double:
         data = fast(load("mavlink_copter.yaml"))
         entry = data["performers"][0]
         del entry["double"]
         entry["url"] = double.url
-        data["replanning"] = {"max_replans": 1}
+        data["replanning"] = {"max_replans": max_replans}
 
-        def inject() -> None:
+        def injector() -> None:
             if double.wait_for(lambda s: s["north"] > 20, timeout=30):
-                double.failsafe("Battery")
+                inject(double)
 
-        injector = threading.Thread(target=inject, name="failsafe-injector")
-        injector.start()
+        thread = threading.Thread(target=injector, name="fault-injector")
+        thread.start()
         try:
             report = run(data)
         finally:
-            injector.join()
-    assert not report.success
+            thread.join()
+    return double.url, report
+
+
+def failed_actions(report: MissionReport) -> list[tuple[str, str]]:
     assert report.result is not None
-    failed = [r for r in report.result.actions if r.status == ActionStatus.FAILED]
-    assert failed, report.summary()
-    assert failed[0].text.startswith("(fly uav1")
-    assert failed[0].message == f"{double.url}: failsafe: 'Battery Failsafe'"
+    return [(r.text, r.message) for r in report.result.actions
+            if r.status == ActionStatus.FAILED]
+
+
+def test_failsafe_mid_mission_fails_cleanly_with_the_reason() -> None:
+    url, report = copter_mission_with_fault(lambda d: d.failsafe("Battery"), max_replans=0)
+    assert not report.success
+    assert failed_actions(report) == [
+        ("(fly uav1 pad north_field)", f"{url}: failsafe: 'Battery Failsafe'")
+    ]
+
+
+def test_mode_taken_over_mid_mission_is_replanned_and_completed() -> None:
+    # someone switches to LOITER: the flight fails, the copter hovers, the executor
+    # replans and the new plan's first flight takes GUIDED back
+    url, report = copter_mission_with_fault(lambda d: d.change_mode("LOITER"), max_replans=1)
+    assert report.success, report.summary()
+    assert report.result is not None and report.result.replans == 1
+    assert failed_actions(report) == [
+        ("(fly uav1 pad north_field)",
+         f"{url}: mode changed to LOITER by someone else (expected GUIDED)")
+    ]
 
 
 def test_refused_takeoff_fails_the_mission_with_the_reason() -> None:

@@ -351,3 +351,70 @@ def test_performer_starts_its_own_double() -> None:
     asyncio.run(main())
     assert out[0].success, out[0].status
     assert positions[0] < 1.5
+
+
+def test_rtl_and_hold_actions(copter: VehicleDouble, rover: VehicleDouble) -> None:
+    out: dict[str, list[ActionOutcome]] = {"uav1": [], "ugv1": []}
+
+    async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
+        out["uav1"].append(await act(hub, "takeoff", "uav1", "pad"))
+        out["uav1"].append(await act(hub, "fly", "uav1", "pad", "gate"))
+        out["uav1"].append(await act(hub, "hold", "uav1"))
+        out["uav1"].append(await act(hub, "rtl", "uav1"))
+        out["ugv1"].append(await act(hub, "drive", "ugv1", "yard", "east_field"))
+        out["ugv1"].append(await act(hub, "hold", "ugv1"))
+        out["ugv1"].append(await act(hub, "rtl", "ugv1"))
+        out["ugv1"].append(await act(hub, "land", "ugv1"))
+
+    run_with([("uav1", copter), ("ugv1", rover)], body)
+    assert [o.status for o in out["uav1"][2:]] == ["holding in LOITER", "landed and disarmed"]
+    assert [o.status for o in out["ugv1"][1:]] == ["holding in HOLD", "back at home, holding",
+                                                   "stopped and disarmed"]
+    assert all(o.success for o in out["uav1"] + out["ugv1"])
+    assert near(copter, 0, 0) and copter.state()["mode"] == "RTL"
+    assert near(rover, 0, 0) and not rover.state()["armed"]
+
+
+def test_next_action_works_after_the_link_came_back(copter: VehicleDouble) -> None:
+    out: list[ActionOutcome] = []
+
+    async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
+        out.append(await act(hub, "takeoff", "uav1", "pad"))
+        copter.drop_link(2.0 * SPEEDUP)  # 2 s of silence, 1 s heartbeat timeout
+        out.append(await act(hub, "fly", "uav1", "pad", "gate"))
+        await asyncio.sleep(1.2)
+        out.append(await act(hub, "fly", "uav1", "pad", "gate"))
+
+    run_with([("uav1", copter)], body)
+    assert [o.success for o in out] == [True, False, True], [o.status for o in out]
+    assert "no HEARTBEAT" in out[1].status
+
+
+def test_vehicle_restarted_is_reconnected() -> None:
+    with VehicleDouble("rover", speedup=SPEEDUP, ekf_delay=2.0) as first:
+        port = first.port
+        out: list[ActionOutcome] = []
+        second: list[VehicleDouble] = []
+
+        async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
+            out.append(await act(hub, "drive", "ugv1", "yard", "gate"))
+            await asyncio.get_running_loop().run_in_executor(None, first.stop)
+            vehicle = performers[0].vehicle
+            assert vehicle is not None
+            while vehicle.connected:  # the reader thread reports the closed link
+                await asyncio.sleep(0.01)
+            out.append(await act(hub, "drive", "ugv1", "gate", "yard"))
+            second.append(VehicleDouble("rover", speedup=SPEEDUP, ekf_delay=2.0,
+                                        port=port).start())
+            out.append(await act(hub, "drive", "ugv1", "yard", "gate"))
+
+        try:
+            run_with([("ugv1", first)], body, timeouts={
+                "connect": 0.5, "heartbeat": 1.0, "command": 0.5, "ekf": 20, "arm": 10,
+                "action": 30})
+        finally:
+            for d in second:
+                d.stop()
+        assert [o.success for o in out] == [True, False, True], [o.status for o in out]
+        assert out[1].status.startswith(f"reconnect failed: {first.url}: cannot open the link")
+        assert near(second[0], -30, 25)

@@ -31,6 +31,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--port", type=int, default=5760, help="port to listen on (0 = any)")
     parser.add_argument("--udp", action="store_true",
                         help="listen on UDP (client URL udpout:127.0.0.1:PORT) instead of TCP")
+    parser.add_argument("--out", default=None, metavar="HOST:PORT",
+                        help="UDP: send to a listening client there (client URL udpin:HOST:PORT)")
     parser.add_argument("--speedup", type=float, default=1.0, help="simulated seconds per second")
     parser.add_argument("--ekf-delay", type=float, default=20.0,
                         help="simulated seconds until the EKF uses GPS and arming is allowed")
@@ -48,8 +50,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     }
     if args.home is not None:
         overrides["home"] = args.home
+    peer = None
+    if args.out is not None:
+        host, _, port = args.out.rpartition(":")
+        if not host or not port.isdigit():
+            raise SystemExit(f"--out wants HOST:PORT, got {args.out!r}")
+        peer = (host, int(port))
     double = VehicleDouble(args.model, speedup=args.speedup, port=args.port,
-                           transport="udp" if args.udp else "tcp", **overrides)
+                           transport="udp" if args.udp or peer else "tcp", peer=peer,
+                           **overrides)
     done = threading.Event()
 
     def _stop(signum: int, frame: FrameType | None) -> None:

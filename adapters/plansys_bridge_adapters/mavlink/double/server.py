@@ -36,6 +36,10 @@ MAX_GAP = 2.0
 class VehicleDouble:
     """A simulated ArduPilot vehicle serving MAVLink on a loopback socket.
 
+    ``transport="tcp"``: a server, the client connects (``tcp:HOST:PORT``).
+    ``transport="udp"``: listens, the client sends first (``udpout:HOST:PORT``);
+    with ``peer=(host, port)`` it sends there instead and the client listens
+    (``udpin:HOST:PORT``). :attr:`url` is the client's connection string.
     Use as a context manager, or :meth:`start` / :meth:`stop`. The fault methods
     are safe to call from any thread while it runs.
     """
@@ -50,6 +54,7 @@ class VehicleDouble:
         transport: Transport = "tcp",
         params: SimParams | None = None,
         tick: float = 0.005,
+        peer: tuple[str, int] | None = None,
         **overrides: Any,
     ) -> None:
         if model not in ("copter", "rover"):
@@ -71,7 +76,12 @@ class VehicleDouble:
         self._stop = threading.Event()
         self._sock: socket.socket | None = None
         self._client: socket.socket | None = None
-        self._peer: tuple[str, int] | None = None
+        self._peer: tuple[str, int] | None = peer
+        """UDP: where to send; the last sender once one has been heard."""
+        self.out = peer
+        """UDP ``--out`` address given at construction (the client listens there)."""
+        if peer is not None and transport != "udp":
+            raise ValueError("vehicle double peer (an --out address) needs transport 'udp'")
         self._parser = mavlink2.MAVLink(None)
         self._parser.robust_parsing = True
         self.port = 0
@@ -82,6 +92,8 @@ class VehicleDouble:
     @property
     def url(self) -> str:
         """The pymavlink connection string a client uses to reach this double."""
+        if self.out is not None:
+            return f"udpin:{self.out[0]}:{self.out[1]}"
         scheme = "tcp" if self.transport == "tcp" else "udpout"
         return f"{scheme}:{self.host}:{self.port}"
 
@@ -104,6 +116,10 @@ class VehicleDouble:
         self._sock = sock
         self.port = sock.getsockname()[1]
         self._stop.clear()
+        if self.out is not None:
+            # Sending to a listening client, like SITL's --out: nobody will speak
+            # first, so the clock starts now.
+            self.sim.connect()
         self._thread = threading.Thread(
             target=self._run, name=f"mavlink-double-{self.params.model}-{self.port}", daemon=True
         )
