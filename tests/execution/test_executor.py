@@ -509,3 +509,107 @@ def test_cooking_two_robots_cook_two_dishes() -> None:
     assert run.result.success, run.result.message
     assert k.is_goal_satisfied()
     assert run.result.efficiency_percent > 100.0
+
+
+# ---------------------------------------------------------------- more cases
+
+
+def test_performer_failures_replan_until_the_budget_is_used(
+    simple: tuple[Domain, ProblemExpert],
+) -> None:
+    domain, k = simple
+    failing = [
+        PerformerSpec(
+            "r2d2_node",
+            {"move": ["r2d2"], "patrol": ["r2d2"]},
+            {"move": 5.0, "patrol": 2.0},
+            {"success_rate": 0.0},
+        )
+    ]
+    run = run_scenario(
+        domain,
+        k,
+        execute(SIMPLE_PLAN, goal=k.get_goal()),
+        failing,
+        planner=Planner(timeout=20.0),
+        options=ExecutorOptions(max_replans=2),
+    )
+    res = run.result
+    assert res.status == "failed" and res.replans == 2 and len(res.plans) == 3
+    assert "replanning budget of 2 used up" in res.message
+    assert res.failures == 3  # the first action of each plan
+    assert [a.plan_index for a in res.actions if a.status == ActionStatus.FAILED] == [0, 1, 2]
+
+
+def test_plain_actions_use_preconditions_over_all_and_effects_at_end() -> None:
+    from plansys_bridge.pddl.parser import parse_domain
+
+    domain = parse_domain(
+        """
+        (define (domain walk)
+          (:requirements :strips :typing)
+          (:types robot place)
+          (:predicates (at ?r - robot ?p - place) (road ?a ?b - place))
+          (:action go
+            :parameters (?r - robot ?a ?b - place)
+            :precondition (and (at ?r ?a) (road ?a ?b))
+            :effect (and (not (at ?r ?a)) (at ?r ?b))))
+        """
+    )
+    k = knowledge_from(
+        domain,
+        instances={"bot": "robot", "p1": "place", "p2": "place", "p3": "place"},
+        facts=["(at bot p1)", "(road p1 p2)", "(road p2 p3)"],
+    )
+    plan = parse_plan("0: (go bot p1 p2) [1]\n1: (go bot p2 p3) [1]\n")
+    performers = [PerformerSpec("walker", {"go": ["bot"]}, {"go": 4.0})]
+
+    def close_road(knowledge: ProblemExpert, _e: Executor) -> None:
+        knowledge.remove_predicate("(road p2 p3)")
+
+    ok = run_scenario(domain, k, execute(plan), performers)
+    assert ok.result.success
+    assert [(a.start, a.end) for a in ok.result.actions] == [(0.0, 4.0), (4.0, 8.0)]
+    assert k.exist_predicate("(at bot p3)") and not k.exist_predicate("(at bot p1)")
+    # the precondition is an over-all requirement: breaking it halts the action
+    k2 = knowledge_from(
+        domain,
+        instances={"bot": "robot", "p1": "place", "p2": "place", "p3": "place"},
+        facts=["(at bot p1)", "(road p1 p2)", "(road p2 p3)"],
+    )
+    broken = run_scenario(domain, k2, execute(plan), performers, events=[(6.0, close_road)])
+    second = broken.result.actions[1]
+    assert second.status == ActionStatus.FAILED and second.end == pytest.approx(6.0)
+    assert "over all requirement (road p2 p3) no longer holds" in second.message
+    assert k2.exist_predicate("(at bot p2)")  # a plain action changes nothing until its end
+
+
+def test_executor_runs_on_the_wall_clock(simple: tuple[Domain, ProblemExpert]) -> None:
+    from plansys_bridge.clock import WallClock, run
+    from plansys_bridge.hub.hub import Hub
+    from plansys_bridge.hub.transport import InProcessTransport
+    from plansys_bridge.performers.base import PerformerContext
+    from plansys_bridge.performers.simulated import SimulatedPerformer
+
+    domain, k = simple
+    clock = WallClock(time_scale=0.01)  # 9 s of mission in about 0.09 s
+
+    async def main() -> ExecutionResult:
+        hub = Hub(InProcessTransport(), clock)
+        await hub.start()
+        spec = SIMPLE_PERFORMERS[0]
+        perf = SimulatedPerformer(
+            PerformerContext(hub, clock, k), spec.name, spec.actions, durations=spec.durations
+        )
+        await perf.start()
+        try:
+            return await Executor(hub, domain, k).execute(SIMPLE_PLAN)
+        finally:
+            await perf.stop()
+            await hub.close()
+
+    res = run(main(), clock)
+    assert res.success
+    assert res.total_time == pytest.approx(9.0, abs=1.5)
+    starts = [a.start for a in res.actions]
+    assert starts == sorted(starts)  # type: ignore[type-var]
