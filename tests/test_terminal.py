@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import io
+import os
 from pathlib import Path
 
 import pytest
@@ -14,9 +15,10 @@ from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.planning.plan import Plan, PlanStep
 from plansys_bridge.terminal import HELP, Terminal
 
-FIXTURES = Path("/work/shared/fixtures/plansys2")
-if not FIXTURES.is_dir():
-    FIXTURES = Path(__file__).resolve().parent / "fixtures" / "plansys2"
+FIXTURES = Path(
+    os.environ.get("PLANSYS_BRIDGE_FIXTURES")
+    or Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "plansys2"
+)
 EXAMPLES = FIXTURES / "ros2_planning_system_examples"
 SIMPLE_DOMAIN = EXAMPLES / "plansys2_simple_example/pddl/simple_example.pddl"
 BT_DOMAIN = EXAMPLES / "plansys2_bt_example/pddl/bt_example.pddl"

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
-PLANSYS2 = Path("/work/shared/fixtures/plansys2")
-if not PLANSYS2.is_dir():  # the repository's own copy, when the shared one is absent
-    PLANSYS2 = Path(__file__).resolve().parents[1] / "fixtures" / "plansys2"
+# The corpus lives in shared/ beside the repository (or where $PLANSYS_BRIDGE_FIXTURES says).
+PLANSYS2 = Path(
+    os.environ.get("PLANSYS_BRIDGE_FIXTURES")
+    or Path(__file__).resolve().parents[3] / "shared" / "fixtures" / "plansys2"
+)
 PROBLEM_EXPERT_PDDL = PLANSYS2 / "ros2_planning_system/plansys2_problem_expert/test/pddl"
 DOMAIN_EXPERT_PDDL = PLANSYS2 / "ros2_planning_system/plansys2_domain_expert/test/pddl"
 
