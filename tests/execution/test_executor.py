@@ -613,3 +613,86 @@ def test_executor_runs_on_the_wall_clock(simple: tuple[Domain, ProblemExpert]) -
     assert res.total_time == pytest.approx(9.0, abs=1.5)
     starts = [a.start for a in res.actions]
     assert starts == sorted(starts)  # type: ignore[type-var]
+
+
+def test_an_end_waits_for_the_happenings_it_must_follow() -> None:
+    """hold_open closes the door at its end, so that end waits for pass to end,
+    even when pass runs longer than planned (PlanSys2's CHECK_PREV_ACTIONS)."""
+    from test_plan_graph import door_setup
+
+    domain, k = door_setup()
+    plan = parse_plan("0.000: (hold_open holder d1) [10.000]\n0.001: (pass walker d1) [3.000]\n")
+    performers = [
+        PerformerSpec("holder", {"hold_open": ["holder"]}, {"hold_open": 10.0}),
+        PerformerSpec("walker", {"pass": ["walker"]}, {"pass": 12.0}),
+    ]
+    seen: dict[float, bool] = {}
+
+    def look(t: float):  # type: ignore[no-untyped-def]
+        def probe(knowledge: ProblemExpert, _e: Executor) -> None:
+            seen[t] = knowledge.exist_predicate("(door_open d1)")
+
+        return (t, probe)
+
+    infos: list[ActionExecutionInfo] = []
+    run = run_scenario(
+        domain, k, execute(plan, on_info=infos.append), performers, events=[look(11.0)]
+    )
+    hold, walk = run.result.actions
+    assert run.result.success
+    assert walk.start == hold.start == 0.0  # pass started with the door, not after it
+    assert hold.end == pytest.approx(10.0) and walk.end == pytest.approx(12.0)
+    assert seen == {11.0: True}  # hold_open's performer is done, its end effect waits
+    done = {i.action_full_name: i.status_stamp for i in infos if i.status == ActionStatus.SUCCEEDED}
+    assert done == {"(pass walker d1)": 12.0, "(hold_open holder d1)": 12.0}
+    assert not k.exist_predicate("(door_open d1)")
+    assert k.exist_predicate("(passed walker d1)")
+    assert k.get_function("total-cost", ()) == pytest.approx(2.0)
+
+
+def test_cancelled_action_gets_its_numeric_at_start_effects_back() -> None:
+    domain = load_domain("domain_charging.pddl")
+    k = knowledge_from(
+        domain,
+        instances={"r1": "robot", "wp1": "waypoint", "wp2": "waypoint"},
+        facts=["(robot_at r1 wp1)", "(connected wp1 wp2)"],
+        functions=[
+            "(= (speed r1) 1)",
+            "(= (max_range r1) 100)",
+            "(= (state_of_charge r1) 50)",
+            "(= (distance wp1 wp2) 10)",
+        ],
+    )
+    plan = parse_plan("0: (move r1 wp1 wp2) [10]\n")
+    seen: list[float | None] = []
+
+    def probe(knowledge: ProblemExpert, _e: Executor) -> None:
+        seen.append(knowledge.get_function("state_of_charge", ("r1",)))
+
+    def cancel(_k: ProblemExpert, executor: Executor) -> None:
+        executor.cancel()
+
+    performers = [PerformerSpec("r1", {"move": ["r1"]}, {"move": 10.0})]
+    run = run_scenario(domain, k, execute(plan), performers, events=[(2.0, probe), (4.0, cancel)])
+    assert run.result.status == "cancelled"
+    assert seen == [pytest.approx(40.0)]  # the at-start decrease was applied
+    assert k.get_function("state_of_charge", ("r1",)) == pytest.approx(50.0)
+    assert k.exist_predicate("(robot_at r1 wp1)")
+
+
+def test_options_from_mission_sections_name_bad_keys() -> None:
+    from plansys_bridge.errors import ConfigError
+
+    opts = ExecutorOptions.from_config(
+        {"at_start_timeout": 2.5, "overrun_percentage": 20},
+        auction={"retry_period": 0.5},
+        replanning={"max_replans": 5},
+    )
+    assert opts.at_start_timeout == 2.5 and opts.overrun_percentage == 20
+    assert opts.auction.retry_period == 0.5 and opts.max_replans == 5
+    with pytest.raises(ConfigError, match=r"execution\.at_start_timout"):
+        ExecutorOptions.from_config({"at_start_timout": 1})
+    with pytest.raises(ConfigError, match=r"replanning\.max_replans: must be >= 0"):
+        ExecutorOptions.from_config({}, replanning={"max_replans": -1})
+    with pytest.raises(ConfigError, match=r"execution\.overrun_percentage"):
+        ExecutorOptions(overrun_percentage=-5)
