@@ -90,6 +90,11 @@ class TelemetryPublisher:
         self._remove: Callable[[], None] | None = None
         self._disabled: set[str] = set()
 
+    @property
+    def disabled(self) -> frozenset[str]:
+        """Settings the knowledge refused (e.g. a function the domain lacks)."""
+        return frozenset(self._disabled)
+
     def start(self) -> None:
         if self._remove is None and self.config.enabled:
             self._remove = self.vehicle.add_listener(self._on_message)

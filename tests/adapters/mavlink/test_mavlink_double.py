@@ -10,6 +10,7 @@ from typing import Any
 
 import pytest
 from plansys_bridge_adapters.mavlink.double import SimParams, VehicleDouble, VehicleSim
+from plansys_bridge_adapters.mavlink.geo import GeoPoint, offset
 from plansys_bridge_adapters.mavlink.modes import COPTER_MODES
 from pymavlink.dialects.v20 import ardupilotmega as ml
 
@@ -149,6 +150,27 @@ def test_takeoff_needs_arming_and_guided() -> None:
     for _ in range(2000):
         sim.step(0.05)
     assert sim.landed and not sim.armed
+
+
+def test_battery_drains_and_its_failsafe_fires() -> None:
+    sim = VehicleSim(SimParams(model="rover", ekf_delay=0.5, battery_capacity_s=100.0,
+                               battery_failsafe_pct=50.0))
+    sim.connect()
+    sim.step(1.0)
+    sim._command(ml.MAV_CMD_DO_SET_MODE, (1, 15, 0, 0, 0, 0, 0))
+    sim._command(ml.MAV_CMD_COMPONENT_ARM_DISARM, (1, 0, 0, 0, 0, 0, 0))
+    far = offset(sim.p.home, 10_000, 0)
+    sim.guided_target = GeoPoint(far.lat, far.lon, 0.0)
+    for _ in range(2000):
+        sim.step(0.05)
+        if sim.failsafe:
+            break
+    assert sim.failsafe and sim.mode_name == "HOLD"
+    assert 49.0 <= sim.battery <= 50.0
+    parser = ml.MAVLink(None)
+    texts = [m.text for m in parser.parse_buffer(b"".join(sim.take_output())) or []
+             if m.get_type() == "STATUSTEXT"]
+    assert "Battery Failsafe" in texts
 
 
 def test_command_line_serves_a_vehicle() -> None:

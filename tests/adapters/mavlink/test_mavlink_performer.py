@@ -263,26 +263,53 @@ def test_battery_goes_into_the_knowledge(copter: VehicleDouble) -> None:
     domain = parse_domain((CONFIGS / "pddl" / "drone_domain.pddl").read_text(), "drone_domain")
     knowledge = ProblemExpert(domain)
     knowledge.load_problem((CONFIGS / "pddl" / "drone_problem_copter.pddl").read_text())
-    seen: list[float | None] = []
+    seen: list[tuple[float | None, bool]] = []
+
+    def snapshot() -> None:
+        seen.append((knowledge.get_function("battery", ["uav1"]),
+                     knowledge.exist_predicate("(battery_low uav1)")))
+
+    async def until(predicate: Callable[[], bool]) -> None:
+        for _ in range(300):
+            if predicate():
+                return
+            await asyncio.sleep(0.01)
 
     async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
-        for _ in range(200):
-            if knowledge.get_function("battery", ["uav1"]) is not None:
-                break
-            await asyncio.sleep(0.01)
-        seen.append(knowledge.get_function("battery", ["uav1"]))
+        knowledge.set_function("(= (battery uav1) 0)")
+        await until(lambda: knowledge.get_function("battery", ["uav1"]) == 100.0)
+        snapshot()
         copter.set_battery(12.0)
-        for _ in range(200):
-            if knowledge.exist_predicate("(battery_low uav1)"):
-                break
-            await asyncio.sleep(0.01)
+        await until(lambda: knowledge.exist_predicate("(battery_low uav1)"))
+        snapshot()
+        copter.set_battery(22.0)  # above 20 but within the 5 % hysteresis: still low
+        await until(lambda: knowledge.get_function("battery", ["uav1"]) == 22.0)
+        snapshot()
+        copter.set_battery(26.0)
+        await until(lambda: not knowledge.exist_predicate("(battery_low uav1)"))
+        snapshot()
 
     run_with([("uav1", copter)], body, knowledge=knowledge,
              telemetry={"battery_function": "battery", "low_battery_predicate": "battery_low",
                         "low_battery_threshold": 20})
-    assert seen == [100.0]
-    assert knowledge.exist_predicate("(battery_low uav1)")
-    assert knowledge.get_function("battery", ["uav1"]) == 12.0
+    assert seen == [(100.0, False), (12.0, True), (22.0, True), (26.0, False)]
+
+
+def test_telemetry_the_domain_lacks_is_dropped_once(copter: VehicleDouble) -> None:
+    domain = parse_domain((CONFIGS / "pddl" / "drone_domain.pddl").read_text(), "drone_domain")
+    knowledge = ProblemExpert(domain)
+    knowledge.load_problem((CONFIGS / "pddl" / "drone_problem_copter.pddl").read_text())
+    out: list[ActionOutcome] = []
+
+    async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
+        out.append(await act(hub, "takeoff", "uav1", "pad"))
+        publisher = performers[0].telemetry
+        assert publisher is not None
+        assert publisher.disabled == {"battery_function"}
+
+    run_with([("uav1", copter)], body, knowledge=knowledge,
+             telemetry={"battery_function": "charge"})
+    assert out[0].success  # a telemetry mismatch never stops the vehicle
 
 
 def test_unreachable_vehicle_names_the_url(tmp_path: Path) -> None:

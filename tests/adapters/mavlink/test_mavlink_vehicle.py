@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import socket
+from collections.abc import Awaitable, Callable
 
 import pytest
 from mavlink_support import SPEEDUP
@@ -27,11 +28,32 @@ def free_udp_port() -> int:
         return int(s.getsockname()[1])
 
 
+def with_vehicle(url: str, body: Callable[[MavlinkVehicle], Awaitable[None]]) -> MavlinkVehicle:
+    """Connect a client to ``url``, run ``body`` with it, always close it."""
+    v = MavlinkVehicle(url, FAST)
+
+    async def main() -> None:
+        try:
+            await v.connect()
+            await body(v)
+        finally:
+            await v.close()
+
+    asyncio.run(main())
+    return v
+
+
 async def arm_guided(v: MavlinkVehicle) -> None:
-    await v.connect()
     await v.set_mode("GUIDED")
     await v.wait_ekf(10)
     await v.arm(5)
+
+
+async def error_of(work: Awaitable[object], kind: type[Exception] = Exception) -> str:
+    """The message of the ``kind`` error ``work`` raises (the test fails if none)."""
+    with pytest.raises(kind) as info:
+        await work
+    return str(info.value)
 
 
 @pytest.mark.parametrize("peer", [False, True], ids=["udpout", "udpin"])
@@ -39,34 +61,20 @@ def test_udp_links_both_ways(peer: bool) -> None:
     out = ("127.0.0.1", free_udp_port()) if peer else None
     with VehicleDouble("rover", speedup=SPEEDUP, ekf_delay=2.0, transport="udp",
                        peer=out) as double:
-        v = MavlinkVehicle(double.url, FAST)
-
-        async def main() -> None:
-            try:
-                await arm_guided(v)
-            finally:
-                await v.close()
-
-        asyncio.run(main())
+        v = with_vehicle(double.url, arm_guided)
         assert double.url.startswith("udpin:" if peer else "udpout:")
         assert v.model == "rover"
         assert double.state()["armed"]
 
 
 def test_telemetry_cache_fills_after_connect(copter: VehicleDouble) -> None:
-    v = MavlinkVehicle(copter.url, FAST)
+    async def body(v: MavlinkVehicle) -> None:
+        await v.wait_position(2)
+        await v.wait_for(lambda: v.telemetry.battery_remaining is not None, 2, "battery")
+        await v.wait_ekf(5)
+        await v.wait_home(2)
 
-    async def main() -> None:
-        try:
-            await v.connect()
-            await v.wait_position(2)
-            await v.wait_for(lambda: v.telemetry.battery_remaining is not None, 2, "battery")
-            await v.wait_ekf(5)
-            await v.wait_home(2)
-        finally:
-            await v.close()
-
-    asyncio.run(main())
+    v = with_vehicle(copter.url, body)
     t = v.telemetry
     assert t.position is not None and t.position.alt == pytest.approx(0.0)
     assert t.home is not None and t.home.alt == pytest.approx(584.0)
@@ -76,116 +84,77 @@ def test_telemetry_cache_fills_after_connect(copter: VehicleDouble) -> None:
 
 
 def test_refusal_quotes_the_vehicle_and_arming_retries_until_timeout() -> None:
+    errors: list[str] = []
+
+    async def body(v: MavlinkVehicle) -> None:
+        errors.append(await error_of(v.arm(timeout=0.5, retry_period=0.1), CommandRefused))
+
     with VehicleDouble("copter", speedup=1.0, ekf_delay=1e6) as double:
-        v = MavlinkVehicle(double.url, FAST)
-        errors: list[Exception] = []
-
-        async def main() -> None:
-            try:
-                await v.connect()
-                try:
-                    await v.arm(timeout=0.5, retry_period=0.1)
-                except CommandRefused as exc:
-                    errors.append(exc)
-            finally:
-                await v.close()
-
-        asyncio.run(main())
-        [err] = errors
-        assert str(err) == (f"{double.url}: arming refused (MAV_RESULT_FAILED): still refused "
-                            "after 0.5 s: PreArm: Need Position Estimate")
+        with_vehicle(double.url, body)
         arms = [c for c in double.sim.commands_seen if c == ml.MAV_CMD_COMPONENT_ARM_DISARM]
-        assert len(arms) >= 3
+    assert errors == [f"{double.url}: arming refused (MAV_RESULT_FAILED): still refused "
+                      "after 0.5 s: PreArm: Need Position Estimate"]
+    assert len(arms) >= 3
 
 
 def test_unanswered_command_times_out_naming_it(copter: VehicleDouble) -> None:
-    v = MavlinkVehicle(copter.url, FAST)
-    errors: list[Exception] = []
+    errors: list[str] = []
 
-    async def main() -> None:
-        try:
-            await v.connect()
-            copter.drop_link(1000.0)
-            try:
-                await v.command(ml.MAV_CMD_DO_SET_MODE, 1, 4)
-            except CommandTimeout as exc:
-                errors.append(exc)
-        finally:
-            await v.close()
+    async def body(v: MavlinkVehicle) -> None:
+        copter.drop_link(1000.0)
+        errors.append(await error_of(v.command(ml.MAV_CMD_DO_SET_MODE, 1, 4), CommandTimeout))
 
-    asyncio.run(main())
-    assert [str(e) for e in errors] == [
+    with_vehicle(copter.url, body)
+    assert errors == [
         f"{copter.url}: MAV_CMD_DO_SET_MODE: no COMMAND_ACK after 2 tries (0.2 s each)"
     ]
 
 
 def test_closed_link_ends_supervised_work(copter: VehicleDouble) -> None:
-    v = MavlinkVehicle(copter.url, FAST)
-    errors: list[Exception] = []
+    errors: list[str] = []
 
-    async def main() -> None:
-        try:
-            await v.connect()
-            work = asyncio.ensure_future(v.supervise(asyncio.sleep(10)))
-            await asyncio.sleep(0.05)
-            await asyncio.get_running_loop().run_in_executor(None, copter.stop)
-            try:
-                await work
-            except LinkError as exc:
-                errors.append(exc)
-            assert not v.connected
-        finally:
-            await v.close()
+    async def body(v: MavlinkVehicle) -> None:
+        work = asyncio.ensure_future(v.supervise(asyncio.sleep(10)))
+        await asyncio.sleep(0.05)
+        await asyncio.get_running_loop().run_in_executor(None, copter.stop)
+        errors.append(await error_of(work, LinkError))
+        assert not v.connected
 
-    asyncio.run(main())
-    assert [str(e) for e in errors] == [f"{copter.url}: link closed by the vehicle"]
+    with_vehicle(copter.url, body)
+    assert errors == [f"{copter.url}: link closed by the vehicle"]
 
 
 def test_mode_change_we_asked_for_is_not_a_fault(copter: VehicleDouble) -> None:
-    v = MavlinkVehicle(copter.url, FAST)
     outcome: list[object] = []
 
-    async def main() -> None:
-        try:
-            await arm_guided(v)
+    async def body(v: MavlinkVehicle) -> None:
+        await arm_guided(v)
 
-            async def work() -> str:
-                await v.set_mode("LOITER")
-                await v.set_mode("GUIDED")
-                await asyncio.sleep(0.1)
-                return "ok"
+        async def work() -> str:
+            await v.set_mode("LOITER")
+            await v.set_mode("GUIDED")
+            await asyncio.sleep(0.1)
+            return "ok"
 
-            outcome.append(await v.supervise(work()))
-            copter.change_mode("ALT_HOLD")
-            try:
-                await v.supervise(asyncio.sleep(5))
-            except VehicleFault as exc:
-                outcome.append(str(exc))
-        finally:
-            await v.close()
+        outcome.append(await v.supervise(work()))
+        copter.change_mode("ALT_HOLD")
+        outcome.append(await error_of(v.supervise(asyncio.sleep(5)), VehicleFault))
 
-    asyncio.run(main())
+    with_vehicle(copter.url, body)
     assert outcome == ["ok", f"{copter.url}: mode changed to ALT_HOLD by someone else "
                              "(expected GUIDED)"]
 
 
 def test_unexpected_disarm_is_a_fault(copter: VehicleDouble) -> None:
-    v = MavlinkVehicle(copter.url, FAST)
     errors: list[str] = []
 
-    async def main() -> None:
-        try:
-            await arm_guided(v)
-            v.expect_armed = True
-            try:
-                # no take-off: the copter disarms itself after DISARM_DELAY
-                await v.supervise(asyncio.sleep(10))
-            except VehicleFault as exc:
-                errors.append(str(exc))
-        finally:
-            await v.close()
+    async def body(v: MavlinkVehicle) -> None:
+        await arm_guided(v)
+        v.expect_armed = True
+        # no take-off: the copter disarms itself after DISARM_DELAY
+        errors.append(await error_of(v.supervise(asyncio.sleep(10)), VehicleFault))
 
-    asyncio.run(main())
+    with_vehicle(copter.url, body)
     assert len(errors) == 1
     assert errors[0].startswith(f"{copter.url}: disarmed unexpectedly (vehicle said: ")
     assert "Disarming motors" in errors[0]
