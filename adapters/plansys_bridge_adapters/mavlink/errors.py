@@ -34,6 +34,10 @@ class CommandTimeout(MavlinkError):
     """A command got no COMMAND_ACK after every retry."""
 
 
+class WaitTimeout(MavlinkError):
+    """The vehicle did not reach a state (EKF ready, altitude, mode) in time."""
+
+
 class VehicleFault(MavlinkError):
     """The vehicle did something the action did not ask for.
 

@@ -35,7 +35,14 @@ from typing import Any, TypeVar
 
 from pymavlink import mavutil
 
-from .errors import CommandRefused, CommandTimeout, LinkError, MavlinkError, VehicleFault
+from .errors import (
+    CommandRefused,
+    CommandTimeout,
+    LinkError,
+    MavlinkError,
+    VehicleFault,
+    WaitTimeout,
+)
 from .geo import GeoPoint
 from .modes import MAV_AUTOPILOT_ARDUPILOTMEGA, Model, mode_name, mode_number, model_of_type
 
@@ -140,6 +147,7 @@ class MavlinkVehicle:
         self._send_lock = threading.Lock()
         self._listeners: list[Callable[[Any], None]] = []
         self._connected = False
+        self._closed_by_us = False
 
     # ------------------------------------------------------------ connection
     @property
@@ -155,6 +163,7 @@ class MavlinkVehicle:
         deadline = loop.time() + self.settings.connect_timeout
         self._conn = await self._open(deadline)
         self._closing.clear()
+        self._closed_by_us = False
         self._link_error = None
         self._reader = threading.Thread(
             target=self._read_loop, name=f"mavlink-reader {self.url}", daemon=True
@@ -203,6 +212,7 @@ class MavlinkVehicle:
     async def close(self) -> None:
         """Stop the reader thread and close the link (idempotent)."""
         self._connected = False
+        self._closed_by_us = True
         for task in self._tasks:
             task.cancel()
         for task in self._tasks:
@@ -261,7 +271,7 @@ class MavlinkVehicle:
         return lambda: self._listeners.remove(callback) if callback in self._listeners else None
 
     def _on_link_error(self, reason: str) -> None:
-        if self._link_error is None and not (self._closing.is_set() and not self._connected):
+        if self._link_error is None and not self._closed_by_us:
             self._link_error = reason
             self._raise_fault(LinkError(self.url, reason))
         self._wake()
@@ -439,7 +449,7 @@ class MavlinkVehicle:
                 raise LinkError(self.url, f"{self._link_error} while waiting for {what}")
             remaining = deadline - loop.time()
             if remaining <= 0:
-                raise LinkError(self.url, f"timed out after {timeout:g} s waiting for {what}")
+                raise WaitTimeout(self.url, f"timed out after {timeout:g} s waiting for {what}")
             await self._next_message(min(remaining, 0.25))
 
     async def wait_message(self, timeout: float) -> None:
