@@ -42,7 +42,7 @@ from plansys_bridge.performers.base import (
 )
 
 from .double import VehicleDouble
-from .errors import MavlinkError
+from .errors import CommandRefused, MavlinkError
 from .geo import GeoPoint, distance_3d_m, distance_m
 from .locations import LocationMap, load_locations
 from .modes import Model
@@ -54,7 +54,8 @@ log = logging.getLogger(__name__)
 DOES = ("takeoff", "goto", "land", "rtl", "hold")
 _COMMAND_KEYS = frozenset({"do", "vehicle_arg", "target_arg", "altitude", "seconds"})
 _DOUBLE_KEYS = frozenset({"model", "speedup", "transport", "ekf_delay", "home", "disarm_delay",
-                          "cruise_speed", "battery_failsafe_pct", "battery_capacity_s"})
+                          "cruise_speed", "battery_failsafe_pct", "battery_capacity_s",
+                          "position_modes_need_ekf"})
 _TIMEOUT_KEYS = frozenset({"connect", "heartbeat", "command", "ekf", "arm", "action"})
 
 
@@ -253,10 +254,19 @@ class MavlinkPerformer(ActionPerformer):
     async def _arm_ready(self, v: MavlinkVehicle) -> None:
         """GUIDED, EKF ready, armed (retrying while arming checks fail)."""
         t = self.settings.timeouts
-        await v.set_mode("GUIDED")
+        try:
+            await v.set_mode("GUIDED")  # ArduPilot allows any mode while disarmed
+        except CommandRefused:
+            if v.ekf_ready():
+                raise
+            guided_later = True  # firmware that wants a position first
+        else:
+            guided_later = False
         if not v.ekf_ready():
             self._progress(0.0, "waiting for the EKF to use GPS")
             await v.wait_ekf(t.ekf)
+        if guided_later:
+            await v.set_mode("GUIDED")
         if not v.telemetry.armed:
             self._progress(0.0, "arming")
             await v.arm(t.arm)

@@ -568,13 +568,15 @@ class MavlinkVehicle:
         if old == number:
             self.expected_modes = frozenset({number})
             return
+        previous = self.expected_modes
         self._pending_mode = (old if old is not None else -1, number)
-        self.expected_modes = self.expected_modes | {number}
+        self.expected_modes = previous | {number}
         try:
             await self.command(ML.MAV_CMD_DO_SET_MODE, ML.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
                                number)
         except MavlinkError:
             self._pending_mode = None
+            self.expected_modes = previous
             raise
         await self.wait_for(lambda: self.telemetry.custom_mode == number, timeout,
                             f"mode {name.upper()}")

@@ -204,6 +204,20 @@ def test_arming_is_retried_until_accepted() -> None:
         assert double.state()["time"] >= 30.0
 
 
+def test_guided_refused_before_the_ekf_is_set_after_it() -> None:
+    with VehicleDouble("copter", speedup=SPEEDUP, ekf_delay=20.0,
+                       position_modes_need_ekf=True) as double:
+        out: list[ActionOutcome] = []
+
+        async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
+            out.append(await act(hub, "takeoff", "uav1", "pad"))
+
+        run_with([("uav1", double)], body)
+        assert out[0].success, out[0].status
+        modes = [c for c in double.sim.commands_seen if c == ml.MAV_CMD_DO_SET_MODE]
+        assert len(modes) == 2  # refused before the EKF, accepted after
+
+
 def test_ekf_that_never_converges_fails_with_the_reason() -> None:
     with VehicleDouble("copter", speedup=SPEEDUP, ekf_delay=1e6) as double:
         out: list[ActionOutcome] = []

@@ -98,6 +98,9 @@ class SimParams:
     """Seconds of flight/driving from 100 % to 0 % (idle drains a tenth as fast)."""
     battery_failsafe_pct: float = 0.0
     """Remaining % at which the battery failsafe fires (0 = off)."""
+    position_modes_need_ekf: bool = False
+    """Refuse GUIDED/LOITER/... without a position even when disarmed (ArduPilot
+    allows any mode while disarmed and checks at arming; some firmware does not)."""
     system_id: int = 1
     component_id: int = 1
 
@@ -247,7 +250,8 @@ class VehicleSim:
         if number not in mode_table(self.model).values():
             return ML.MAV_RESULT_UNSUPPORTED
         name = mode_name(self.model, number)
-        if self.armed and not self.ekf_ready and name in NEEDS_POSITION and not by_pilot:
+        checked = self.armed or self.p.position_modes_need_ekf
+        if checked and not self.ekf_ready and name in NEEDS_POSITION and not by_pilot:
             text = f"Mode change failed: {name} requires position"
             self.statustext(SEV.MAV_SEVERITY_WARNING, text)
             return ML.MAV_RESULT_FAILED
