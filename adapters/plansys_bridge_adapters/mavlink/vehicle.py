@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 from pymavlink import mavutil
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from .errors import (
     CommandRefused,
@@ -47,7 +48,7 @@ from .geo import GeoPoint
 from .modes import MAV_AUTOPILOT_ARDUPILOTMEGA, Model, mode_name, mode_number, model_of_type
 
 log = logging.getLogger(__name__)
-ML: Any = mavutil.mavlink
+ML: Any = mavlink2
 T = TypeVar("T")
 
 MAV_TYPE_GCS = 6
@@ -194,7 +195,7 @@ class MavlinkVehicle:
         last: Exception | None = None
         while True:
             try:
-                return await self._loop.run_in_executor(
+                conn = await self._loop.run_in_executor(
                     None,
                     lambda: mavutil.mavlink_connection(
                         device,
@@ -203,11 +204,27 @@ class MavlinkVehicle:
                         **kwargs,
                     ),
                 )
+                return self._speak_mavlink2(conn)
             except (OSError, ValueError) as exc:
                 last = exc
             if self._loop.time() + 0.5 > deadline:
                 raise LinkError(self.url, f"cannot open the link: {last}") from last
             await asyncio.sleep(0.5)
+
+    def _speak_mavlink2(self, conn: Any) -> Any:
+        """Give the link its own MAVLink 2 codec (ArduPilot's default protocol).
+
+        Left alone, pymavlink switches protocol on the first MAVLink 2 byte by
+        setting ``MAVLINK20`` in the process environment and swapping its global
+        dialect, which changes every other link in the process; this link never
+        does that. MAVLink 1 frames from older vehicles still parse.
+        """
+        conn.mav = mavlink2.MAVLink(conn, srcSystem=self.settings.source_system,
+                                    srcComponent=self.settings.source_component)
+        conn.mav.robust_parsing = True
+        conn.WIRE_PROTOCOL_VERSION = "2.0"
+        conn.first_byte = False
+        return conn
 
     async def close(self) -> None:
         """Stop the reader thread and close the link (idempotent)."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import os
 import socket
 from collections.abc import Awaitable, Callable
 
@@ -67,7 +68,10 @@ def test_udp_links_both_ways(peer: bool) -> None:
         assert double.state()["armed"]
 
 
-def test_telemetry_cache_fills_after_connect(copter: VehicleDouble) -> None:
+def test_telemetry_cache_fills_after_connect(copter: VehicleDouble,
+                                            monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("MAVLINK20", raising=False)
+
     async def body(v: MavlinkVehicle) -> None:
         await v.wait_position(2)
         await v.wait_for(lambda: v.telemetry.battery_remaining is not None, 2, "battery")
@@ -81,6 +85,8 @@ def test_telemetry_cache_fills_after_connect(copter: VehicleDouble) -> None:
     assert t.battery_remaining == 100.0
     assert v.mode == "STABILIZE" and v.model == "copter"
     assert {"HEARTBEAT", "COMMAND_LONG"} <= set(copter.received)
+    # the link spoke MAVLink 2 without switching pymavlink's process-wide dialect
+    assert "MAVLINK20" not in os.environ
 
 
 def test_refusal_quotes_the_vehicle_and_arming_retries_until_timeout() -> None:
