@@ -11,12 +11,13 @@ Updates are rate-limited to changes of at least ``battery_step`` percent.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
 from plansys_bridge.errors import ConfigError, PlansysBridgeError
 
+from .checks import mapping
 from .vehicle import MavlinkVehicle
 
 log = logging.getLogger(__name__)
@@ -54,12 +55,7 @@ class TelemetryConfig:
     def from_mapping(cls, data: object, key: str) -> TelemetryConfig:
         if data is None:
             return cls()
-        if not isinstance(data, Mapping):
-            raise ConfigError("must be a mapping, e.g. {battery_function: battery}", key=key)
-        for name in data:
-            if name not in _KEYS:
-                raise ConfigError(f"unknown key (allowed: {', '.join(_KEYS)})",
-                                  key=f"{key}.{name}")
+        data = mapping(data, key, _KEYS, "must be a mapping, e.g. {battery_function: battery}")
         values: dict[str, Any] = {}
         for name in ("battery_function", "low_battery_predicate"):
             value = data.get(name)

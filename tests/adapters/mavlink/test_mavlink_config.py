@@ -8,7 +8,8 @@ from typing import Any
 import pytest
 import yaml
 from mavlink_support import CONFIGS, build, make_hub, performer_config
-from plansys_bridge_adapters.mavlink.performer import MavlinkPerformer, default_command
+from plansys_bridge_adapters.mavlink.performer import MavlinkPerformer
+from plansys_bridge_adapters.mavlink.settings import default_command
 
 from plansys_bridge.clock import VirtualClock
 from plansys_bridge.errors import ConfigError
@@ -71,7 +72,7 @@ def test_actions_without_commands_do_what_their_name_says() -> None:
         ({"actions": {"fly": ["uav2"]}, "commands": {"fly": {"do": "goto", "vehicle_arg": 0}}},
          "performers[0].commands.fly.vehicle_arg", "specialises it to 'uav2'"),
         ({"timeouts": {"ekf": 0}}, "performers[0].timeouts.ekf", "number > 0"),
-        ({"timeouts": {"boot": 3}}, "performers[0].timeouts.boot", "unknown timeout"),
+        ({"timeouts": {"boot": 3}}, "performers[0].timeouts.boot", "unknown key"),
         ({"telemetry": {"battery": "b"}}, "performers[0].telemetry.battery", "unknown key"),
         ({"telemetry": {"low_battery_threshold": -1}},
          "performers[0].telemetry.low_battery_threshold", ">= 0"),

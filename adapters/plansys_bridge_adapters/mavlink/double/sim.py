@@ -76,7 +76,6 @@ COPTER_ARMABLE = frozenset({"STABILIZE", "ACRO", "ALT_HOLD", "GUIDED", "LOITER",
 NEEDS_POSITION = frozenset({"GUIDED", "LOITER", "RTL", "AUTO", "POSHOLD", "BRAKE", "CIRCLE",
                             "SMART_RTL", "HOLD"})
 FORCE_DISARM_MAGIC = 21196
-SEV = ML  # MAV_SEVERITY_* constants live on the dialect module
 
 
 @dataclass
@@ -175,7 +174,7 @@ class VehicleSim:
         """A client connected: start the clock (SITL waits for its first client)."""
         if not self.started:
             self.started = True
-            self.statustext(SEV.MAV_SEVERITY_INFO, f"ArduPilot {self._firmware()} double")
+            self.statustext(ML.MAV_SEVERITY_INFO, f"ArduPilot {self._firmware()} double")
 
     def handle(self, msg: Any) -> None:
         """React to one decoded message from the ground station."""
@@ -253,7 +252,7 @@ class VehicleSim:
         checked = self.armed or self.p.position_modes_need_ekf
         if checked and not self.ekf_ready and name in NEEDS_POSITION and not by_pilot:
             text = f"Mode change failed: {name} requires position"
-            self.statustext(SEV.MAV_SEVERITY_WARNING, text)
+            self.statustext(ML.MAV_SEVERITY_WARNING, text)
             return ML.MAV_RESULT_FAILED
         self._enter_mode(number)
         return ML.MAV_RESULT_ACCEPTED
@@ -275,24 +274,24 @@ class VehicleSim:
             if not self.armed:
                 return ML.MAV_RESULT_ACCEPTED
             if self.model == "copter" and not self.landed and not force:
-                self.statustext(SEV.MAV_SEVERITY_CRITICAL, "Disarm: not landed")
+                self.statustext(ML.MAV_SEVERITY_CRITICAL, "Disarm: not landed")
                 return ML.MAV_RESULT_FAILED
             self._disarm("Disarming motors")
             return ML.MAV_RESULT_ACCEPTED
         if self.armed:
             return ML.MAV_RESULT_ACCEPTED
         if not self.ekf_ready:
-            self.statustext(SEV.MAV_SEVERITY_CRITICAL, "PreArm: Need Position Estimate")
+            self.statustext(ML.MAV_SEVERITY_CRITICAL, "PreArm: Need Position Estimate")
             return ML.MAV_RESULT_FAILED
         if self.model == "copter" and self.mode_name not in COPTER_ARMABLE:
-            self.statustext(SEV.MAV_SEVERITY_CRITICAL, "Arm: Mode not armable")
+            self.statustext(ML.MAV_SEVERITY_CRITICAL, "Arm: Mode not armable")
             return ML.MAV_RESULT_FAILED
         if self.battery <= max(self.p.battery_failsafe_pct, 0.0) + 1e-9 and self.battery < 100:
-            self.statustext(SEV.MAV_SEVERITY_CRITICAL, "PreArm: Battery 1 below minimum capacity")
+            self.statustext(ML.MAV_SEVERITY_CRITICAL, "PreArm: Battery 1 below minimum capacity")
             return ML.MAV_RESULT_FAILED
         self.armed = True
         self.idle_since = self.time
-        self.statustext(SEV.MAV_SEVERITY_INFO, "Arming motors")
+        self.statustext(ML.MAV_SEVERITY_INFO, "Arming motors")
         return ML.MAV_RESULT_ACCEPTED
 
     def _disarm(self, text: str) -> None:
@@ -301,7 +300,7 @@ class VehicleSim:
         self.guided_target = None
         self.takeoff_alt = None
         self.vn = self.ve = self.vd = 0.0
-        self.statustext(SEV.MAV_SEVERITY_INFO, text)
+        self.statustext(ML.MAV_SEVERITY_INFO, text)
 
     def _takeoff(self, alt: float) -> int:
         if self.model != "copter":
@@ -341,7 +340,7 @@ class VehicleSim:
     def inject_failsafe(self, reason: str = "Battery") -> None:
         """Fault: a failsafe fires; copter goes to RTL (LAND on the ground), rover to HOLD."""
         self.failsafe = True
-        self.statustext(SEV.MAV_SEVERITY_CRITICAL, f"{reason} Failsafe")
+        self.statustext(ML.MAV_SEVERITY_CRITICAL, f"{reason} Failsafe")
         target = ("LAND" if self.landed else "RTL") if self.model == "copter" else "HOLD"
         self._enter_mode(mode_number(self.model, target))
 
@@ -361,8 +360,8 @@ class VehicleSim:
         self.time += dt
         if not self.ekf_ready and self.time >= self.p.ekf_delay:
             self.ekf_ready = True
-            self.statustext(SEV.MAV_SEVERITY_INFO, "EKF3 IMU0 is using GPS")
-            self.statustext(SEV.MAV_SEVERITY_INFO, "EKF3 IMU0 origin set")
+            self.statustext(ML.MAV_SEVERITY_INFO, "EKF3 IMU0 is using GPS")
+            self.statustext(ML.MAV_SEVERITY_INFO, "EKF3 IMU0 origin set")
         if self.armed:
             self._move(dt)
             moving = math.hypot(self.vn, self.ve) > 0.1 or abs(self.vd) > 0.1 or not self.landed
