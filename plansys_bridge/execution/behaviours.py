@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import asyncio
 import heapq
+import logging
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -54,6 +55,8 @@ __all__ = [
     "WaitAtStartReq",
     "WaitForPredecessors",
 ]
+
+log = logging.getLogger(__name__)
 
 
 # ---------------------------------------------------------------- run-time state
@@ -250,7 +253,10 @@ class PlanContext:
         )
         self.hub.publish(Topics.ACTION_EXECUTION_INFO, info)
         if self.on_info is not None:
-            self.on_info(info)
+            try:
+                self.on_info(info)
+            except Exception:  # a broken observer must not break the plan
+                log.exception("on_info callback %r failed", self.on_info)
 
     # ------------------------------------------------------------ which branches to tick
 

@@ -300,7 +300,9 @@ class Executor:
                 finally:
                     if handle is not None:
                         handle.cancel()
-        except asyncio.CancelledError:
+        except BaseException:
+            # cancelled from outside, or a template's behaviour raised: stop every
+            # performer of this plan before letting the exception through
             ctx.cancelled = True
             root.stop(Status.INVALID)
             for task in list(ctx.tasks):

@@ -163,3 +163,35 @@ def overlap(intervals: Sequence[tuple[float, float]]) -> float:
         active += delta
         last = t
     return total
+
+
+DOOR_DOMAIN = """
+(define (domain door)
+  (:requirements :typing :durative-actions :fluents)
+  (:types robot door)
+  (:predicates (door_open ?d - door) (passed ?r - robot ?d - door))
+  (:functions (total-cost))
+  (:durative-action hold_open
+    :parameters (?r - robot ?d - door)
+    :duration (= ?duration 10)
+    :condition (and)
+    :effect (and (at start (door_open ?d)) (at end (not (door_open ?d)))
+                 (at end (increase (total-cost) 1))))
+  (:durative-action pass
+    :parameters (?r - robot ?d - door)
+    :duration (= ?duration 3)
+    :condition (and (at start (door_open ?d)) (over all (door_open ?d)))
+    :effect (and (at end (passed ?r ?d)) (at end (increase (total-cost) 1))))
+)
+"""
+
+
+def door_setup() -> tuple[Domain, ProblemExpert]:
+    """A door one robot holds open while others pass (required concurrency)."""
+    domain = parse_domain(DOOR_DOMAIN)
+    k = knowledge_from(
+        domain,
+        instances={"holder": "robot", "walker": "robot", "walker2": "robot", "d1": "door"},
+        functions=["(= (total-cost) 0)"],
+    )
+    return domain, k

@@ -10,6 +10,7 @@ import pytest
 from execution_helpers import (
     PerformerSpec,
     Run,
+    door_setup,
     knowledge_from,
     load_domain,
     overlap,
@@ -618,8 +619,6 @@ def test_executor_runs_on_the_wall_clock(simple: tuple[Domain, ProblemExpert]) -
 def test_an_end_waits_for_the_happenings_it_must_follow() -> None:
     """hold_open closes the door at its end, so that end waits for pass to end,
     even when pass runs longer than planned (PlanSys2's CHECK_PREV_ACTIONS)."""
-    from test_plan_graph import door_setup
-
     domain, k = door_setup()
     plan = parse_plan("0.000: (hold_open holder d1) [10.000]\n0.001: (pass walker d1) [3.000]\n")
     performers = [
@@ -696,3 +695,41 @@ def test_options_from_mission_sections_name_bad_keys() -> None:
         ExecutorOptions.from_config({}, replanning={"max_replans": -1})
     with pytest.raises(ConfigError, match=r"execution\.overrun_percentage"):
         ExecutorOptions(overrun_percentage=-5)
+
+
+def test_an_exception_in_a_template_stops_the_plan_and_its_performers(
+    simple: tuple[Domain, ProblemExpert],
+) -> None:
+    class Explode(py_trees.behaviour.Behaviour):
+        def update(self) -> py_trees.common.Status:
+            raise RuntimeError("sensor driver crashed")
+
+    def move_template(nodes: ActionNodes) -> py_trees.behaviour.Behaviour:
+        return py_trees.composites.Sequence(
+            "exploding",
+            memory=True,
+            children=[
+                nodes.wait_for_predecessors(),
+                nodes.apply_at_start_effect(),
+                nodes.running(),
+                Explode("explode"),
+                nodes.apply_at_end_effect(),
+            ],
+        )
+
+    domain, k = simple
+    k.add_instance("c3po", "robot")
+    k.add_predicate("(robot_at c3po hall)")
+    plan = parse_plan("0: (move r2d2 kitchen hall) [5]\n0: (patrol c3po hall) [20]\n")
+    performers = [
+        *SIMPLE_PERFORMERS,
+        PerformerSpec("c3po_node", {"patrol": ["c3po"]}, {"patrol": 20.0}),
+    ]
+    with pytest.raises(RuntimeError, match="sensor driver crashed"):
+        run_scenario(
+            domain,
+            k,
+            execute(plan),
+            performers,
+            options=ExecutorOptions(templates={"move": move_template}),
+        )

@@ -10,14 +10,13 @@ from __future__ import annotations
 
 import networkx as nx
 import pytest
-from execution_helpers import knowledge_from, load_domain
+from execution_helpers import door_setup, knowledge_from, load_domain
 
 from plansys_bridge.errors import ExecutionError
 from plansys_bridge.execution.dot import plan_graph_to_dot
 from plansys_bridge.execution.plan_graph import PlanGraphError, build_plan_graph
 from plansys_bridge.hub.messages import ActionStatus
 from plansys_bridge.pddl.model import Atom
-from plansys_bridge.pddl.parser import parse_domain
 from plansys_bridge.planning.plan import parse_plan
 
 FACTORY_PLAN = """
@@ -31,36 +30,6 @@ FACTORY_PLAN = """
 10.002: (move robot2 assembly_zone wheels_zone)  [5.000]
 10.002: (move robot1 assembly_zone steering_wheels_zone)  [5.000]
 """
-
-DOOR_DOMAIN = """
-(define (domain door)
-  (:requirements :typing :durative-actions :fluents)
-  (:types robot door)
-  (:predicates (door_open ?d - door) (passed ?r - robot ?d - door))
-  (:functions (total-cost))
-  (:durative-action hold_open
-    :parameters (?r - robot ?d - door)
-    :duration (= ?duration 10)
-    :condition (and)
-    :effect (and (at start (door_open ?d)) (at end (not (door_open ?d)))
-                 (at end (increase (total-cost) 1))))
-  (:durative-action pass
-    :parameters (?r - robot ?d - door)
-    :duration (= ?duration 3)
-    :condition (and (at start (door_open ?d)) (over all (door_open ?d)))
-    :effect (and (at end (passed ?r ?d)) (at end (increase (total-cost) 1))))
-)
-"""
-
-
-def door_setup():  # type: ignore[no-untyped-def]
-    domain = parse_domain(DOOR_DOMAIN)
-    k = knowledge_from(
-        domain,
-        instances={"holder": "robot", "walker": "robot", "walker2": "robot", "d1": "door"},
-        functions=["(= (total-cost) 0)"],
-    )
-    return domain, k
 
 
 def test_factory_robots_run_in_parallel_and_wait_only_for_what_they_need() -> None:
