@@ -302,6 +302,7 @@ class PlanContext:
         rec.performer = outcome.performer
         rec.completion = outcome.completion
         rec.message = outcome.status
+        rec.reauctioned = outcome.reauctioned
         self.progress = True
 
     def feedback(self, rt: ActionRuntime, completion: float, status: str) -> None:

@@ -35,6 +35,8 @@ class ActionRecord:
     step: int = 0
     planned_duration: float = 0.0
     request_id: str = ""
+    reauctioned: int = 0
+    """How many times the action was auctioned again after losing its performer."""
 
     @property
     def execution_time(self) -> float:

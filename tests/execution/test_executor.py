@@ -733,3 +733,21 @@ def test_an_exception_in_a_template_stops_the_plan_and_its_performers(
             performers,
             options=ExecutorOptions(templates={"move": move_template}),
         )
+
+
+def test_a_dead_performer_is_replaced_and_the_record_says_so(
+    simple: tuple[Domain, ProblemExpert],
+) -> None:
+    domain, k = simple
+    plan = parse_plan("0: (patrol r2d2 kitchen) [2]\n")
+    performers = [
+        PerformerSpec(
+            "dying", {"patrol": ["r2d2"]}, {"patrol": 2.0}, {"faults": {"die_rate": 1.0}}
+        ),
+        PerformerSpec("healthy", {"patrol": ["r2d2"]}, {"patrol": 2.0}),
+    ]
+    run = run_scenario(domain, k, execute(plan), performers)
+    (patrol,) = run.result.actions
+    assert run.result.success
+    assert patrol.reauctioned == 1 and patrol.performer == "healthy"
+    assert patrol.end is not None and patrol.end > 5.0  # the liveness timeout passed first
