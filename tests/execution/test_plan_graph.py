@@ -54,6 +54,8 @@ def test_factory_robots_run_in_parallel_and_wait_only_for_what_they_need() -> No
 
 
 def test_actions_needing_only_an_at_start_effect_start_together_issue_211() -> None:
+    """#211: two actions at 0 and 0.001 "shall be executed together or the second wait
+    for the first to start"; PlanSys2 made the second wait for the first's end."""
     domain, k = door_setup()
     plan = parse_plan("0.000: (hold_open holder d1) [10.000]\n0.001: (pass walker d1) [3.000]\n")
     graph = build_plan_graph(plan, domain, k.state())
@@ -122,6 +124,9 @@ def test_unknown_action_or_arity_names_the_step() -> None:
 
 
 def test_a_chain_keeps_only_direct_edges_and_deleters_wait_for_readers() -> None:
+    """The plan of PlanSys2's examples PR #12 / #190 ("road trip"): PlanSys2 started a
+    patrol and the move away from the patrolled room together; the move deletes what
+    the patrol needs over all, so it must wait for the patrol's end."""
     domain = load_domain("simple_example.pddl")
     k = knowledge_from(
         domain,
