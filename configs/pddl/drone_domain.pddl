@@ -2,8 +2,10 @@
 ; A copter takes off, surveys locations from the air and lands; a rover drives
 ; to locations to inspect them.
 ; Durations are rough times at the vehicle double's default speeds.
+; (battery_low ?v) comes from the vehicle's telemetry: it stops flights and drives
+; (over all), so the executor halts them and replans, landing where it can.
 (define (domain mavlink_drones)
-  (:requirements :strips :typing :durative-actions :numeric-fluents)
+  (:requirements :strips :typing :negative-preconditions :durative-actions :numeric-fluents)
   (:types
     vehicle location - object
     copter rover - vehicle)
@@ -29,7 +31,8 @@
     :parameters (?c - copter ?from - location ?to - location)
     :duration (= ?duration 10)
     :condition (and (at start (at ?c ?from))
-                    (over all (airborne ?c)))
+                    (over all (airborne ?c))
+                    (over all (not (battery_low ?c))))
     :effect (and (at start (not (at ?c ?from)))
                  (at end (at ?c ?to))
                  (at end (surveyed ?to))))
@@ -45,7 +48,8 @@
   (:durative-action drive
     :parameters (?r - rover ?from - location ?to - location)
     :duration (= ?duration 15)
-    :condition (and (at start (at ?r ?from)))
+    :condition (and (at start (at ?r ?from))
+                    (over all (not (battery_low ?r))))
     :effect (and (at start (not (at ?r ?from)))
                  (at end (at ?r ?to))
                  (at end (inspected ?to))))

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable, Mapping
 from typing import Any
 
+import pytest
 import yaml
 from mavlink_support import CONFIGS, SPEEDUP
 from plansys_bridge_adapters.mavlink.double import VehicleDouble
@@ -93,12 +95,46 @@ def failed_actions(report: MissionReport) -> list[tuple[str, str]]:
             if r.status == ActionStatus.FAILED]
 
 
-def test_failsafe_mid_mission_fails_cleanly_with_the_reason() -> None:
-    url, report = copter_mission_with_fault(lambda d: d.failsafe("Battery"), max_replans=0)
+@pytest.mark.parametrize(
+    ("inject", "reason"),
+    [
+        (lambda d: d.failsafe("Battery"), "failsafe: 'Battery Failsafe'"),
+        (lambda d: d.statustext("Crash: Disarming", ml.MAV_SEVERITY_CRITICAL),
+         "vehicle reported MAV_SEVERITY_CRITICAL: 'Crash: Disarming'"),
+        (lambda d: d.drop_link(1000.0), "no HEARTBEAT for "),
+    ],
+    ids=["failsafe", "statustext", "heartbeat"],
+)
+def test_fault_mid_mission_fails_cleanly_with_the_reason(
+    inject: Callable[[VehicleDouble], None], reason: str
+) -> None:
+    url, report = copter_mission_with_fault(inject, max_replans=0)
     assert not report.success
+    [(text, message)] = failed_actions(report)
+    assert text == "(fly uav1 pad north_field)"
+    assert message.startswith(f"{url}: {reason}")
+
+
+def test_low_battery_halts_the_flight_and_the_copter_brakes() -> None:
+    # telemetry puts (battery_low uav1) into the knowledge; fly needs it false over
+    # all, so the executor halts the flight (CANCEL: the copter brakes) and replans
+    states: list[Mapping[str, Any]] = []
+
+    def low_battery(double: VehicleDouble) -> None:
+        double.set_battery(15.0)
+        double.wait_for(lambda s: s["mode"] == "BRAKE", timeout=10)
+        states.append(double.state())
+
+    _, report = copter_mission_with_fault(low_battery, max_replans=1)
+    assert not report.success
+    assert report.status == "replan_failed"
     assert failed_actions(report) == [
-        ("(fly uav1 pad north_field)", f"{url}: failsafe: 'Battery Failsafe'")
+        ("(fly uav1 pad north_field)",
+         "over all requirement (not (battery_low uav1)) no longer holds")
     ]
+    [state] = states
+    assert state["mode"] == "BRAKE" and not state["landed"]
+    assert 20 < state["north"] < 60
 
 
 def test_mode_taken_over_mid_mission_is_replanned_and_completed() -> None:
