@@ -277,6 +277,7 @@ class Executor:
         goal_atoms = self._goal_atoms(goal)
         clock = self.hub.clock
         try:
+            last_dot = clock.now()
             if self.options.publish_dot:
                 self._publish_dot(ctx, goal_atoms)
             while True:
@@ -287,7 +288,12 @@ class Executor:
                     break
                 self._tick(root, ctx)
                 if ctx.changed and self.options.publish_dot:
-                    self._publish_dot(ctx, goal_atoms)
+                    due = last_dot + self.options.dot_period
+                    if clock.now() >= due:
+                        self._publish_dot(ctx, goal_atoms)
+                        last_dot = clock.now()
+                    else:
+                        ctx.schedule(due)
                 if root.status != Status.RUNNING:
                     break
                 deadline = ctx.next_deadline()

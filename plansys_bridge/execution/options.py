@@ -42,6 +42,9 @@ class ExecutorOptions:
       guard against a template that changes state on every tick).
     * ``publish_dot``: publish the coloured DOT graph on ``dot_graph`` after each
       change (coalesced: at most once per wake-up).
+    * ``dot_period``: at most one DOT publication per this many mission seconds
+      (0: after every change). A 5,000-action graph takes ~10 ms to write, so
+      large plans want a period; the final state is always published.
     * ``rollback_on_halt``: when an action is halted or fails after its at-start
       effects were applied, undo those effects (each only if nothing changed it
       since), so the knowledge used for replanning does not keep half an action.
@@ -55,6 +58,7 @@ class ExecutorOptions:
     max_replans: int = 3
     max_ticks_per_wake: int = 1000
     publish_dot: bool = True
+    dot_period: float = 0.0
     rollback_on_halt: bool = True
     action_template: ActionTemplate | None = None
     templates: Mapping[str, ActionTemplate] = field(default_factory=dict)
@@ -62,6 +66,9 @@ class ExecutorOptions:
     def __post_init__(self) -> None:
         _optional_positive(self.at_start_timeout, "execution.at_start_timeout", allow_zero=True)
         _optional_positive(self.overrun_percentage, "execution.overrun_percentage", allow_zero=True)
+        if self.dot_period is None:
+            raise ConfigError("must be a number >= 0", key="execution.dot_period")
+        _optional_positive(self.dot_period, "execution.dot_period", allow_zero=True)
         if isinstance(self.max_replans, bool) or not isinstance(self.max_replans, int):
             raise ConfigError(
                 f"must be an integer, got {self.max_replans!r}", key="replanning.max_replans"

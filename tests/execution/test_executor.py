@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import itertools
 from collections.abc import Iterator
 
 import py_trees
@@ -751,3 +752,27 @@ def test_a_dead_performer_is_replaced_and_the_record_says_so(
     assert run.result.success
     assert patrol.reauctioned == 1 and patrol.performer == "healthy"
     assert patrol.end is not None and patrol.end > 5.0  # the liveness timeout passed first
+
+
+def test_dot_period_limits_dot_publications(simple: tuple[Domain, ProblemExpert]) -> None:
+    domain, k = simple
+    every = run_scenario(domain, k, execute(SIMPLE_PLAN), SIMPLE_PERFORMERS, topics=ALL_TOPICS)
+    k2 = knowledge_from(
+        domain,
+        instances={"r2d2": "robot", "kitchen": "room", "hall": "room"},
+        facts=["(robot_at r2d2 kitchen)", "(connected kitchen hall)", "(battery_full r2d2)"],
+    )
+    sparse = run_scenario(
+        domain,
+        k2,
+        execute(SIMPLE_PLAN),
+        SIMPLE_PERFORMERS,
+        options=ExecutorOptions(dot_period=4.0),
+        topics=ALL_TOPICS,
+    )
+    dot_times = [t for t, topic, _ in sparse.messages if topic == Topics.DOT_GRAPH]
+    assert len(every.of_topic(Topics.DOT_GRAPH)) > len(dot_times) >= 2
+    # the last one is the final state, published when the plan ends
+    assert all(b - a >= 4.0 for a, b in itertools.pairwise(dot_times[:-1]))
+    final = sparse.of_topic(Topics.DOT_GRAPH)[-1]
+    assert isinstance(final, DotGraph) and final.text.count("fillcolor=palegreen") == 3
