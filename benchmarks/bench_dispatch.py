@@ -114,13 +114,13 @@ def main() -> None:
         print(json.dumps(results, indent=2))
         return
     print(f"Auction latency on the wall clock, in-process transport, {args.actions} actions each")
-    header = f"{'case':<34} {'measure':<30} {'median':>9} {'p90':>9} {'p99':>9} {'max':>9}  (us)"
+    header = f"{'case':<42} {'measure':<30} {'median':>9} {'p90':>9} {'p99':>9} {'max':>9}  (us)"
     print(header)
     print("-" * len(header))
     for case, measures in results.items():
         for name, s in measures.items():
             print(
-                f"{case:<34} {name:<30} {s['median_us']:>9.1f} {s['p90_us']:>9.1f} "
+                f"{case:<42} {name:<30} {s['median_us']:>9.1f} {s['p90_us']:>9.1f} "
                 f"{s['p99_us']:>9.1f} {s['max_us']:>9.1f}"
             )
 

@@ -91,6 +91,8 @@ class _VirtualSelector(selectors.BaseSelector):
     happened, advances the loop's virtual time to that timer instead of sleeping.
     While work submitted with ``run_in_executor`` is still running in a thread, time
     holds still and the wrapper waits for real, so a planner call costs no mission time.
+    (Long-lived background work therefore belongs in its own thread, not in the
+    loop's executor: a job that never ends would hold virtual time still forever.)
     """
 
     _THREAD_POLL = 0.05  # real seconds between checks while executor jobs run
