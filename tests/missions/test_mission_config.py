@@ -35,7 +35,11 @@ def _error(data: object) -> ConfigError:
         ({"clock": {"time_scale": 0}}, "clock.time_scale", "greater than 0"),
         ({"performers": [{"kind": "simulated"}]}, "performers[0].name", "required"),
         ({"performers": []}, "performers", "at least 1"),
-        ({"replanning": {"max_replans": -1}}, "replanning.max_replans", "greater than or equal to 0"),
+        (
+            {"replanning": {"max_replans": -1}},
+            "replanning.max_replans",
+            "greater than or equal to 0",
+        ),
         ({"auction": {"selection": "cheapest"}}, "auction.selection", "'first' or 'best_bid'"),
         ({"events": [{"at": 3}]}, "events[0]", "exactly one"),
         ({"goal": None}, None, "problem file or a goal"),

@@ -32,7 +32,8 @@ def test_demo_mission_replans_after_the_battery_drop() -> None:
     assert "battery_full robot1" in failed[0].message
     # the new plan recharges robot1, since the goal keeps every robot charged
     recharged = [
-        a for a in result.actions
+        a
+        for a in result.actions
         if a.text.startswith("(recharge robot1") and a.status == ActionStatus.SUCCEEDED
     ]
     assert recharged
@@ -51,10 +52,7 @@ def test_parallel_robots_overlap_in_time() -> None:
         if a.start is not None and a.end is not None and a.status == ActionStatus.SUCCEEDED
     ]
     overlapping = {
-        (p1, p2)
-        for s1, e1, p1 in spans
-        for s2, e2, p2 in spans
-        if p1 < p2 and s1 < e2 and s2 < e1
+        (p1, p2) for s1, e1, p1 in spans for s2, e2, p2 in spans if p1 < p2 and s1 < e2 and s2 < e1
     }
     robots = {p.split("_")[0] for pair in overlapping for p in pair}
     assert robots == {"robot1", "robot2", "robot3"}
@@ -85,9 +83,10 @@ def test_run_command_with_plan_file(tmp_path: Path, capsys: pytest.CaptureFixtur
     plan.write_text("0.000: (move robot1 cooking_zone recharge_zone)  [3.800]\n")
     mission = tmp_path / "m.yaml"
     mission.write_text(
-        (CONFIGS / "demo_cooking.yaml").read_text().replace(
-            "domain: pddl/", f"domain: {CONFIGS}/pddl/"
-        ).replace("events:\n  - {at: 6.0, remove_predicate: (battery_full robot1)}\n", "")
+        (CONFIGS / "demo_cooking.yaml")
+        .read_text()
+        .replace("domain: pddl/", f"domain: {CONFIGS}/pddl/")
+        .replace("events:\n  - {at: 6.0, remove_predicate: (battery_full robot1)}\n", "")
     )
     code = main(["run", str(mission), "--plan", str(plan), "--clock", "virtual", "--json"])
     out = json.loads(capsys.readouterr().out)
@@ -97,19 +96,28 @@ def test_run_command_with_plan_file(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert out["records"][0]["action"] == "(move robot1 cooking_zone recharge_zone)"
 
 
-def test_run_command_config_error_exit_code(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_run_command_config_error_exit_code(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     bad = tmp_path / "bad.yaml"
-    bad.write_text("domain: x.pddl\ngoal: (and)\nperformers: [{kind: simulatd, name: a, actions: [x]}]\n")
+    bad.write_text(
+        "domain: x.pddl\ngoal: (and)\nperformers: [{kind: simulatd, name: a, actions: [x]}]\n"
+    )
     code = main(["run", str(bad), "--clock", "virtual"])
     err = capsys.readouterr().err
     assert code == 2
     assert "x.pddl" in err or "performers[0].kind" in err
 
 
-def test_unknown_performer_kind_names_the_key(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    text = (CONFIGS / "demo_cooking.yaml").read_text().replace(
-        "domain: pddl/", f"domain: {CONFIGS}/pddl/"
-    ).replace("kind: simulated, name: robot2_arm", "kind: simulatd, name: robot2_arm")
+def test_unknown_performer_kind_names_the_key(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = (
+        (CONFIGS / "demo_cooking.yaml")
+        .read_text()
+        .replace("domain: pddl/", f"domain: {CONFIGS}/pddl/")
+        .replace("kind: simulated, name: robot2_arm", "kind: simulatd, name: robot2_arm")
+    )
     bad = tmp_path / "m.yaml"
     bad.write_text(text)
     code = main(["run", str(bad), "--clock", "virtual"])
