@@ -25,6 +25,7 @@ from plansys_bridge.errors import PddlError, PddlSyntaxError, SourceLocation
 from plansys_bridge.pddl import checks
 from plansys_bridge.pddl.builder import Builder
 from plansys_bridge.pddl.diagnostics import location_at, snippet, with_snippet
+from plansys_bridge.pddl.lexer import PddlLexer
 from plansys_bridge.pddl.merge import merge_domains
 from plansys_bridge.pddl.model import (
     Atom,
@@ -58,6 +59,7 @@ _STARTS = (
 _TERMINAL_WORDS = {
     "NAME": "a name",
     "VARIABLE": "a variable",
+    "TERM": "a name or a variable",
     "NUMBER": "a number",
     "REQUIREMENT": "a requirement such as :typing",
     "TIME_SPEC": "'at start', 'over all' or 'at end'",
@@ -73,14 +75,14 @@ _terminal_text: dict[str, str] = {}
 
 
 def _parser() -> Lark:
-    """The shared parser, built on first use (grammar analysis is cached on disk)."""
+    """The shared parser, built on first use."""
     global _lark
     if _lark is None:
         grammar = resources.files(__package__).joinpath("grammar.lark").read_text("utf-8")
         lark = Lark(
             grammar,
             parser="lalr",
-            lexer="contextual",
+            lexer=PddlLexer,
             start=list(_STARTS),
             transformer=_builder,
             maybe_placeholders=False,
