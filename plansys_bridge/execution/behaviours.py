@@ -31,7 +31,13 @@ from plansys_bridge.execution.plan_graph import END, START, PlanGraph, Point, de
 from plansys_bridge.execution.results import ActionRecord
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome
 from plansys_bridge.hub.hub import Hub
-from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, Topics
+from plansys_bridge.hub.messages import (
+    ActionExecution,
+    ActionExecutionInfo,
+    ActionStatus,
+    ExecutionType,
+    Topics,
+)
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import Atom, Condition, Effect, FluentRef, FluentValue
@@ -191,6 +197,7 @@ class PlanContext:
         self.active: set[int] = {i for i in range(len(self.actions)) if not graph.waits(i, START)}
         """Branches worth ticking: not parked waiting for a predecessor."""
         self.unfinished = len(self.actions)
+        self.by_request = {rt.record.request_id: rt for rt in self.actions}
         self._deadlines: list[float] = []
         self._wake: Callable[[], None] = lambda: None
 
@@ -305,6 +312,14 @@ class PlanContext:
         rec.reauctioned = outcome.reauctioned
         self.progress = True
 
+    def on_hub_message(self, msg: object) -> None:
+        """Stamp the CONFIRM of this plan's actions (when a performer's work begins)."""
+        if isinstance(msg, ActionExecution) and msg.type == ExecutionType.CONFIRM:
+            rt = self.by_request.get(msg.request_id)
+            if rt is not None and rt.record.confirmed is None:
+                rt.record.confirmed = self.now()
+                rt.record.performer = msg.node_id
+
     def feedback(self, rt: ActionRuntime, completion: float, status: str) -> None:
         rt.record.completion = completion
         rt.record.message = status
@@ -330,7 +345,8 @@ class PlanContext:
             return
         if rt.skipped:
             rec.message = rt.reason or rec.message
-            return  # NOT_EXECUTED stays: it never started
+            self.publish_info(rt)  # NOT_EXECUTED stays: it never started; say why
+            return
         rec.status = ActionStatus.FAILED
         rec.message = rt.reason or rec.message or "failed"
         if rt.start_reached and rec.end is None:
@@ -358,6 +374,7 @@ class PlanContext:
         else:
             rt.skipped = True
             rt.record.message = rt.reason or "not started: cancelled"
+            self.publish_info(rt)
 
     def _rollback(self, rt: ActionRuntime) -> None:
         if not self.options.rollback_on_halt or rt.end_reached or rt.start_delta is None:
@@ -554,6 +571,7 @@ class ExecuteAction(ActionBehaviour):
             assert self.client is not None
             self.client.cancel()
             self.rt.record.end = self.ctx.now()
+            self.rt.record.performer = self.client.performer or self.rt.record.performer
 
 
 class CheckTimeout(ActionBehaviour):

@@ -274,6 +274,7 @@ class Executor:
 
         ctx.bind_wake(event.set)
         unsubscribe = self.knowledge.subscribe(from_knowledge)
+        confirms = self.hub.subscribe(Topics.ACTIONS_HUB, ctx.on_hub_message)
         goal_atoms = self._goal_atoms(goal)
         clock = self.hub.clock
         try:
@@ -316,6 +317,7 @@ class Executor:
             raise
         finally:
             unsubscribe()
+            confirms.close()
             ctx.bind_wake(lambda: None)
             if self.options.publish_dot and ctx.changed:
                 self._publish_dot(ctx, goal_atoms)

@@ -18,15 +18,18 @@ __all__ = ["ActionRecord", "ExecutionResult", "efficiency"]
 class ActionRecord:
     """One action of one plan as it was executed.
 
-    ``start``/``end`` are mission-time stamps (``hub.clock.now()``) of the at-start
-    and at-end effects (``end`` is set too when the action failed or was halted
-    after starting). ``plan_index`` says which plan of the result (0: the first,
-    1: after the first replan...) the action belongs to; ``step`` its index there.
+    ``start`` is the mission time (``hub.clock.now()``) of the at-start effects,
+    ``confirmed`` when a performer was confirmed for it (its work begins; later than
+    ``start`` when the performer was busy and the REQUEST had to be repeated), and
+    ``end`` when the performer finished (or the action failed or was halted).
+    ``plan_index`` says which plan of the result (0: the first, 1: after the first
+    replan...) the action belongs to; ``step`` its index there.
     """
 
     text: str
     status: ActionStatus = ActionStatus.NOT_EXECUTED
     start: float | None = None
+    confirmed: float | None = None
     end: float | None = None
     performer: str = ""
     message: str = ""
@@ -40,10 +43,12 @@ class ActionRecord:
 
     @property
     def execution_time(self) -> float:
-        """How long the action ran (0 if it never started)."""
-        if self.start is None or self.end is None:
+        """How long a performer worked on the action: from its confirmation (or the
+        action's start if none was confirmed) to the end; 0 if it never started."""
+        begin = self.confirmed if self.confirmed is not None else self.start
+        if begin is None or self.end is None:
             return 0.0
-        return max(0.0, self.end - self.start)
+        return max(0.0, self.end - begin)
 
 
 @dataclass
@@ -83,6 +88,27 @@ class ExecutionResult:
     @property
     def efficiency_percent(self) -> float:
         return 100.0 * self.efficiency()
+
+    def summary(self) -> str:
+        """A readable report: outcome line, then one line per action."""
+        head = (
+            f"{self.status}: {len(self.actions)} actions, {self.failures} failed, "
+            f"{self.replans} replans, {self.total_time:.1f} s, "
+            f"efficiency {self.efficiency_percent:.1f} %"
+        )
+        lines = [head] + ([f"  {self.message}"] if self.message else [])
+        for a in self.actions:
+            when = (
+                f"{a.start - self.started:8.2f} -> {a.end - self.started:8.2f}"
+                if a.start is not None and a.end is not None
+                else f"{'-':>8}    {'-':>8}"
+            )
+            note = f"  ({a.message})" if a.message and a.status != ActionStatus.SUCCEEDED else ""
+            lines.append(
+                f"  [{a.plan_index}] {a.status.name:<12} {when}  {a.text}"
+                f"{'  by ' + a.performer if a.performer else ''}{note}"
+            )
+        return "\n".join(lines)
 
 
 def efficiency(actions: list[ActionRecord], total_time: float) -> float:

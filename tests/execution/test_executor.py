@@ -235,6 +235,16 @@ def test_over_all_violation_halts_the_action_and_replans(
     assert all(a.status == ActionStatus.SUCCEEDED for a in res.actions if a.plan_index == 1)
     assert k.is_goal_satisfied()
     assert len(run.of_topic(Topics.EXECUTING_PLAN)) == 2
+    # the planner overlapped askcharge and charge, but r2d2 has one performer: charge's
+    # REQUEST is repeated until it is free, and only the performer's work counts
+    charge = next(a for a in res.actions if a.text == "(charge r2d2 dock)")
+    assert charge.start == pytest.approx(4.0) and charge.confirmed == pytest.approx(9.0)
+    assert charge.execution_time == pytest.approx(5.0)
+    assert res.efficiency_percent <= 100.0
+    text = res.summary()
+    assert text.splitlines()[0].startswith("succeeded: ") and "1 replans" in text
+    assert "[0] FAILED           2.00 ->     4.00  (move r2d2 kitchen hall)  by r2d2_node" in text
+    assert "[0] NOT_EXECUTED" in text and "not started: the plan stopped after" in text
 
 
 def test_halted_action_has_its_at_start_effects_undone(
