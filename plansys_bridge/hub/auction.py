@@ -71,7 +71,10 @@ class AuctionPolicy:
     selection: Literal["first", "best_bid"] = "first"
     """``first``: PlanSys2's first responder wins; ``best_bid``: lowest bid wins."""
     bid_window: float = 0.05
-    """With ``best_bid``: how long to collect bids after the first RESPONSE."""
+    """With ``best_bid``: how long to collect bids after the first RESPONSE.
+
+    Keep it well under the performers' ``commit_timeout`` (2 s by default): a bidder
+    stops waiting for CONFIRM after that and would then be declared lost."""
     liveness_timeout: float = 5.0
     """A confirmed performer silent (no FEEDBACK, no RUNNING heartbeat) this long is lost."""
     reauctions: int = 1
