@@ -588,3 +588,30 @@ def test_cancel_before_run_sends_nothing(virtual_hub: Hub, hub_recorder: Any) ->
 
     outcome, rec = scenario(virtual_hub, body, p)
     assert outcome.cancelled and rec.kinds() == []
+
+
+def test_a_plansys2_performer_without_request_ids_is_matched_by_action_text(
+    virtual_hub: Hub, hub_recorder: Any
+) -> None:
+    """PlanSys2's performers know nothing of request_id; the action text identifies."""
+
+    def legacy(msg: object) -> None:
+        if not isinstance(msg, ActionExecution):
+            return
+        reply = None
+        if msg.type is ExecutionType.REQUEST:
+            reply = ExecutionType.RESPONSE
+        elif msg.type is ExecutionType.CONFIRM and msg.node_id == "legacy":
+            reply = ExecutionType.FINISH
+        if reply is not None:
+            virtual_hub.publish(
+                Topics.ACTIONS_HUB,
+                ActionExecution(reply, "legacy", msg.action, msg.arguments, success=True),
+            )
+
+    async def body() -> ActionOutcome:
+        virtual_hub.subscribe(Topics.ACTIONS_HUB, legacy)
+        return await ActionClient(virtual_hub, "move", ["r1", "a"], request_id="new").run()
+
+    outcome = scenario(virtual_hub, body)
+    assert outcome.success and outcome.performer == "legacy" and outcome.status == "succeeded"
