@@ -786,3 +786,21 @@ def test_dot_period_limits_dot_publications(simple: tuple[Domain, ProblemExpert]
     assert all(b - a >= 4.0 for a, b in itertools.pairwise(dot_times[:-1]))
     final = sparse.of_topic(Topics.DOT_GRAPH)[-1]
     assert isinstance(final, DotGraph) and final.text.count("fillcolor=palegreen") == 3
+
+
+def test_an_empty_plan_for_an_unmet_goal_is_replanned(simple: tuple[Domain, ProblemExpert]) -> None:
+    domain, k = simple
+    done = run_scenario(domain, k, execute(Plan(), goal=k.get_goal()), SIMPLE_PERFORMERS)
+    assert done.result.status == "failed" and "the plan ended without achieving the goal" in (
+        done.result.message
+    )
+    replanned = run_scenario(
+        domain,
+        k,
+        execute(Plan(), goal=k.get_goal()),
+        SIMPLE_PERFORMERS,
+        planner=Planner(timeout=20.0),
+    )
+    assert replanned.result.success and replanned.result.replans == 1
+    assert len(replanned.result.plans[0]) == 0 and len(replanned.result.plans[1]) > 0
+    assert k.is_goal_satisfied()
