@@ -182,6 +182,8 @@ class PlanContext:
         self.draining = False
         """Set on the first failure: no further action starts."""
         self.cancelled = False
+        self.halt_requested = False
+        """Set after a failure with ``halt_on_failure``: the executor halts what runs."""
         self.failures: list[str] = []
         self.progress = False
         """Set whenever an action moves on; the executor ticks again while it is set."""
@@ -281,6 +283,8 @@ class PlanContext:
 
     def _stop_starting(self) -> None:
         self.draining = True
+        if self.options.halt_on_failure:
+            self.halt_requested = True
         for rt in self.actions:
             if not rt.finished and not rt.start_reached:
                 self.active.add(rt.index)
@@ -357,7 +361,7 @@ class PlanContext:
         self.publish_info(rt)
 
     def action_halted(self, rt: ActionRuntime) -> None:
-        """The branch was stopped from outside (cancel) before it finished."""
+        """The branch was stopped from outside (cancel, halt) before it finished."""
         if rt.finished:
             return
         rt.finished = True

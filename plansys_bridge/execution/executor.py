@@ -332,8 +332,20 @@ class Executor:
         for _ in range(self.options.max_ticks_per_wake):
             ctx.progress = False
             root.tick_once()
+            if ctx.halt_requested:
+                self._halt_running(root, ctx)
             if root.status != Status.RUNNING or not ctx.progress:
                 return
+
+    def _halt_running(self, root: py_trees.behaviour.Behaviour, ctx: PlanContext) -> None:
+        """Stop every branch still under way (their performers get a CANCEL)."""
+        ctx.halt_requested = False
+        branches = list(root.children) if isinstance(root, py_trees.composites.Composite) else []
+        for rt, branch in zip(ctx.actions, branches, strict=False):
+            if not rt.finished and branch.status == Status.RUNNING:
+                rt.reason = "halted: the plan stopped after " + ctx.failures[0]
+                branch.stop(Status.INVALID)
+        ctx.progress = True
 
     def _goal_atoms(self, goal: Condition | None) -> list[Atom]:
         target = goal if goal is not None else self.knowledge.get_goal()

@@ -45,6 +45,9 @@ class ExecutorOptions:
     * ``dot_period``: at most one DOT publication per this many mission seconds
       (0: after every change). A 5,000-action graph takes ~10 ms to write, so
       large plans want a period; the final state is always published.
+    * ``halt_on_failure``: after a failure, also halt the actions still running
+      (PlanSys2's behaviour) instead of letting them finish first; replanning then
+      starts at once, but their work so far is lost.
     * ``rollback_on_halt``: when an action is halted or fails after its at-start
       effects were applied, undo those effects (each only if nothing changed it
       since), so the knowledge used for replanning does not keep half an action.
@@ -59,6 +62,7 @@ class ExecutorOptions:
     max_ticks_per_wake: int = 1000
     publish_dot: bool = True
     dot_period: float = 0.0
+    halt_on_failure: bool = False
     rollback_on_halt: bool = True
     action_template: ActionTemplate | None = None
     templates: Mapping[str, ActionTemplate] = field(default_factory=dict)

@@ -148,7 +148,7 @@ class PlanRoot(py_trees.composites.Composite):
             self.initialise()
         for index in sorted(self.ctx.active):
             child = self.children[index]
-            if child.status in (Status.SUCCESS, Status.FAILURE):
+            if self.ctx.actions[index].finished or child.status in (Status.SUCCESS, Status.FAILURE):
                 continue
             yield from child.tick()
         if self.ctx.unfinished == 0:

@@ -804,3 +804,36 @@ def test_an_empty_plan_for_an_unmet_goal_is_replanned(simple: tuple[Domain, Prob
     assert replanned.result.success and replanned.result.replans == 1
     assert len(replanned.result.plans[0]) == 0 and len(replanned.result.plans[1]) > 0
     assert k.is_goal_satisfied()
+
+
+@pytest.mark.parametrize("halt", [False, True])
+def test_after_a_failure_running_actions_finish_or_are_halted(
+    simple: tuple[Domain, ProblemExpert], halt: bool
+) -> None:
+    domain, k = simple
+    k.add_instance("c3po", "robot")
+    k.add_predicate("(robot_at c3po hall)")
+    plan = parse_plan("0: (move r2d2 kitchen hall) [5]\n0: (patrol c3po hall) [20]\n")
+    performers = [
+        *SIMPLE_PERFORMERS,
+        PerformerSpec("c3po_node", {"patrol": ["c3po"]}, {"patrol": 20.0}),
+    ]
+    run = run_scenario(
+        domain,
+        k,
+        execute(plan),
+        performers,
+        options=ExecutorOptions(halt_on_failure=halt),
+        events=[(3.0, battery_drop)],
+    )
+    move, patrol = run.result.actions
+    assert move.status == ActionStatus.FAILED and run.result.status == "failed"
+    if halt:
+        assert patrol.status == ActionStatus.CANCELLED and patrol.end == pytest.approx(3.0)
+        assert patrol.message.startswith("halted: the plan stopped after (move r2d2")
+        assert run.result.finished == pytest.approx(3.0)
+        assert not k.exist_predicate("(patrolled hall)")
+    else:
+        assert patrol.status == ActionStatus.SUCCEEDED and patrol.end == pytest.approx(20.0)
+        assert k.exist_predicate("(patrolled hall)")
+    assert k.exist_predicate("(robot_at r2d2 kitchen)")
