@@ -20,7 +20,8 @@ What happens in :meth:`Executor.execute`:
    processed; there is no fixed 10 Hz polling.
 3. On a failure (an action fails, an at-start requirement times out, an over-all
    requirement breaks and halts its action), no further action starts; actions
-   already running and unaffected finish, so their effects are applied whole.
+   already running and unaffected finish, so their effects are applied whole
+   (with ``ExecutorOptions.halt_on_failure`` they are halted instead).
    An action halted after its at-start effects has those effects undone (see
    ``ExecutorOptions.rollback_on_halt``). Then the planner is asked for a new plan
    from the current knowledge (``knowledge.to_problem()`` with the goal) in a
