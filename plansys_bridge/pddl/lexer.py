@@ -16,7 +16,7 @@ parser's current state is read from ``parser_state`` when each token is made.
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 from lark import Token
@@ -63,9 +63,14 @@ class PddlLexer(Lexer):
         assert self.keywords["-"] == "MINUS"
 
     def lex(self, lexer_state: LexerState, parser_state: Any) -> Iterator[Token]:
-        text = lexer_state.text
-        states = parser_state.parse_conf.states
-        stack = parser_state.state_stack
+        return self.tokens(
+            lexer_state.text, parser_state.parse_conf.states, parser_state.state_stack
+        )
+
+    def tokens(
+        self, text: str, states: Mapping[int, Mapping[str, Any]], stack: list[int]
+    ) -> Iterator[Token]:
+        """Tokens of ``text``; ``states[stack[-1]]`` holds what the parser accepts now."""
         keywords = self.keywords
         match = _TOKEN.match
         new = str.__new__

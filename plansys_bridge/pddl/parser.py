@@ -25,6 +25,7 @@ from plansys_bridge.errors import PddlError, PddlSyntaxError, SourceLocation
 from plansys_bridge.pddl import checks
 from plansys_bridge.pddl.builder import Builder
 from plansys_bridge.pddl.diagnostics import location_at, snippet, with_snippet
+from plansys_bridge.pddl.driver import LalrDriver
 from plansys_bridge.pddl.lexer import PddlLexer
 from plansys_bridge.pddl.merge import merge_domains
 from plansys_bridge.pddl.model import (
@@ -71,6 +72,7 @@ _TERMINAL_WORDS = {
 _lock = threading.Lock()
 _builder = Builder()
 _lark: Lark | None = None
+_driver: LalrDriver | None = None
 _terminal_text: dict[str, str] = {}
 
 
@@ -92,6 +94,13 @@ def _parser() -> Lark:
                 _terminal_text[term.name] = repr(term.pattern.value)
         _lark = lark
     return _lark
+
+
+def _get_driver() -> LalrDriver:
+    global _driver
+    if _driver is None:
+        _driver = LalrDriver(_parser())
+    return _driver
 
 
 def _lower(text: str) -> str:
@@ -168,7 +177,7 @@ def _error_offset(exc: UnexpectedInput) -> int | None:
 def _parse(text: str, start: str, filename: str) -> Any:
     """Run the LALR parser; lark errors become PddlSyntaxError with a snippet."""
     lowered = _lower(text)
-    parser = _parser()
+    parser = _get_driver()
     with _lock:
         _builder.file = filename
         try:
