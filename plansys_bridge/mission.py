@@ -22,7 +22,6 @@ from plansys_bridge.errors import ConfigError, PlansysBridgeError
 from plansys_bridge.execution.executor import Executor
 from plansys_bridge.execution.options import ExecutorOptions
 from plansys_bridge.execution.results import ExecutionResult
-from plansys_bridge.hub.auction import AuctionPolicy
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, Topics
 from plansys_bridge.hub.transport import InProcessTransport
@@ -121,20 +120,7 @@ def _keyed(mission: MissionConfig, key: str) -> Iterator[None]:
 
 
 def executor_options(mission: MissionConfig) -> ExecutorOptions:
-    a = mission.auction
-    return ExecutorOptions(
-        auction=AuctionPolicy(
-            retry_period=a.retry_period,
-            give_up_after=a.give_up_after,
-            selection=a.selection,
-            bid_window=a.bid_window,
-            liveness_timeout=a.liveness_timeout,
-            reauctions=a.reauctions,
-        ),
-        at_start_timeout=mission.executor.at_start_timeout,
-        overrun_percentage=mission.executor.overrun_percentage,
-        max_replans=mission.replanning.max_replans,
-    )
+    return mission.executor_options()
 
 
 class MissionSession:

@@ -17,6 +17,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from plansys_bridge.errors import ConfigError
+from plansys_bridge.execution.options import ExecutorOptions
 
 
 class _Strict(BaseModel):
@@ -30,27 +31,17 @@ class ClockConfig(_Strict):
     time_scale: float = Field(1.0, gt=0)
     """Every action duration is multiplied by this (0.05 runs 20x faster)."""
 
+    @model_validator(mode="after")
+    def _scale_needs_wall(self) -> ClockConfig:
+        if self.kind == "virtual" and self.time_scale != 1.0:
+            raise ValueError(
+                "time_scale applies to the wall clock; the virtual clock skips idle time"
+            )
+        return self
+
 
 class TransportConfig(_Strict):
     kind: Literal["inprocess"] = "inprocess"
-
-
-class ReplanningConfig(_Strict):
-    max_replans: int = Field(3, ge=0)
-
-
-class AuctionConfig(_Strict):
-    selection: Literal["first", "best_bid"] = "first"
-    retry_period: float = Field(1.0, gt=0)
-    give_up_after: float = Field(30.0, gt=0)
-    bid_window: float = Field(0.05, ge=0)
-    liveness_timeout: float = Field(5.0, gt=0)
-    reauctions: int = Field(1, ge=0)
-
-
-class ExecutorConfig(_Strict):
-    at_start_timeout: float | None = Field(30.0, gt=0)
-    overrun_percentage: float | None = Field(None, gt=0)
 
 
 class KnowledgeConfig(_Strict):
@@ -98,9 +89,13 @@ class MissionConfig(_Strict):
     performers: list[PerformerEntry] = Field(min_length=1)
     transport: TransportConfig = Field(default_factory=TransportConfig)
     clock: ClockConfig = Field(default_factory=ClockConfig)
-    replanning: ReplanningConfig = Field(default_factory=ReplanningConfig)
-    auction: AuctionConfig = Field(default_factory=AuctionConfig)
-    executor: ExecutorConfig = Field(default_factory=ExecutorConfig)
+    replanning: dict[str, Any] = Field(default_factory=dict)
+    """``max_replans``; checked by :class:`ExecutorOptions`."""
+    auction: dict[str, Any] = Field(default_factory=dict)
+    """:class:`~plansys_bridge.hub.auction.AuctionPolicy` settings."""
+    execution: dict[str, Any] = Field(default_factory=dict)
+    """:class:`~plansys_bridge.execution.options.ExecutorOptions` settings
+    (``at_start_timeout``, ``overrun_percentage``, ...)."""
     events: list[EventConfig] = Field(default_factory=list)
     record: str | None = None
     """Write the whole run to this ROS 2 bag (mcap)."""
@@ -134,6 +129,16 @@ class MissionConfig(_Strict):
     def domain_paths(self) -> list[Path]:
         return [self.resolve(d) for d in self.domain]
 
+    def executor_options(self) -> ExecutorOptions:
+        """The executor settings of the ``execution``, ``auction`` and ``replanning`` keys."""
+        defaults = {"max_replans": 3}
+        try:
+            return ExecutorOptions.from_config(
+                self.execution, auction=self.auction, replanning=defaults | self.replanning
+            )
+        except ConfigError as exc:
+            raise ConfigError(str(exc).split(": ", 1)[-1], key=exc.key, file=self.source) from exc
+
 
 def _key_path(loc: tuple[int | str, ...]) -> str:
     out = ""
@@ -155,13 +160,15 @@ def mission_from_dict(
         if reserved in data:
             raise ConfigError("unknown key", key=reserved, file=source)
     try:
-        return MissionConfig.model_validate(
+        mission = MissionConfig.model_validate(
             {**data, "base_dir": base_dir or Path("."), "source": source}
         )
     except ValidationError as exc:
         err = exc.errors()[0]
         msg = "unknown key" if err["type"] == "extra_forbidden" else err["msg"]
         raise ConfigError(msg, key=_key_path(err["loc"]) or None, file=source) from exc
+    mission.executor_options()  # the executor's own checks, errors naming the key
+    return mission
 
 
 def load_mission(path: str | Path) -> MissionConfig:

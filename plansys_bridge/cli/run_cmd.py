@@ -30,10 +30,12 @@ def handle(args: argparse.Namespace) -> int:
     mission = load_mission(args.mission)
     updates: dict[str, Any] = {}
     if args.clock or args.time_scale:
-        clock = mission.clock.model_copy(
-            update={k: v for k, v in (("kind", args.clock), ("time_scale", args.time_scale)) if v}
-        )
-        updates["clock"] = clock
+        clock = mission.clock.model_dump() | {
+            k: v for k, v in (("kind", args.clock), ("time_scale", args.time_scale)) if v
+        }
+        if clock["kind"] == "virtual":
+            clock["time_scale"] = 1.0
+        updates["clock"] = type(mission.clock).model_validate(clock)
     if args.record:
         updates["record"] = args.record
     if updates:

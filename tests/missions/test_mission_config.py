@@ -38,9 +38,11 @@ def _error(data: object) -> ConfigError:
         (
             {"replanning": {"max_replans": -1}},
             "replanning.max_replans",
-            "greater than or equal to 0",
+            "must be >= 0",
         ),
-        ({"auction": {"selection": "cheapest"}}, "auction.selection", "'first' or 'best_bid'"),
+        ({"auction": {"selection": "cheapest"}}, "auction.selection", "cheapest"),
+        ({"execution": {"at_start_timout": 3}}, "execution.at_start_timout", "unknown setting"),
+        ({"auction": {"retry_period": -1}}, "auction.retry_period", "-1"),
         ({"events": [{"at": 3}]}, "events[0]", "exactly one"),
         ({"goal": None}, None, "problem file or a goal"),
     ],
