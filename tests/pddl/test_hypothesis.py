@@ -188,7 +188,9 @@ problems = st.builds(
     names,
     st.one_of(st.just(""), names),
     st.just(()),
-    st.lists(st.builds(m.TypedName, names, type_lists), max_size=4).map(tuple),
+    st.lists(st.builds(m.TypedName, names, type_lists), max_size=4, unique_by=lambda o: o.name).map(
+        tuple
+    ),
     st.lists(st.builds(m.Atom, names, st.lists(names, max_size=3).map(tuple)), max_size=5).map(
         tuple
     ),
