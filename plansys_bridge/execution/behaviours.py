@@ -27,7 +27,14 @@ from py_trees.common import Status
 
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.execution.options import ExecutorOptions
-from plansys_bridge.execution.plan_graph import END, START, PlanGraph, Point, describe_unmet
+from plansys_bridge.execution.plan_graph import (
+    END,
+    GROUND,
+    START,
+    PlanGraph,
+    Point,
+    describe_unmet,
+)
 from plansys_bridge.execution.results import ActionRecord
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome
 from plansys_bridge.hub.hub import Hub
@@ -233,13 +240,11 @@ class PlanContext:
         return self.knowledge.state()
 
     def holds(self, rt: ActionRuntime, cond: Condition) -> bool:
-        return self.evaluator.holds(cond, self.state(), rt.ground.bindings, rt.step.duration)
+        return self.evaluator.holds(cond, self.state(), GROUND, rt.step.duration)
 
     def unmet(self, rt: ActionRuntime, cond: Condition) -> str:
         """The conjuncts of ``cond`` that do not hold now, as ground PDDL text."""
-        return describe_unmet(
-            self.evaluator, cond, self.state(), rt.ground.bindings, rt.step.duration
-        )
+        return describe_unmet(self.evaluator, cond, self.state(), GROUND, rt.step.duration)
 
     def reached(self, index: int, point: Point) -> bool:
         rt = self.actions[index]
@@ -501,10 +506,10 @@ class ApplyAtStartEffect(ActionBehaviour):
         ctx, rt = self.ctx, self.rt
         effect = rt.ground.start_effect
         rt.start_delta = EffectDelta.of(
-            ctx.evaluator, effect, ctx.state(), rt.ground.bindings, rt.step.duration
+            ctx.evaluator, effect, ctx.state(), GROUND, rt.step.duration
         )
         if not rt.start_delta.empty:
-            ctx.knowledge.apply(effect, rt.ground.bindings, rt.step.duration)
+            ctx.knowledge.apply(effect, GROUND, rt.step.duration)
         ctx.action_started(rt)
         return Status.SUCCESS
 
@@ -625,7 +630,7 @@ class ApplyAtEndEffect(ActionBehaviour):
     def step(self) -> Status:
         ctx, rt = self.ctx, self.rt
         effect = rt.ground.end_effect
-        ctx.knowledge.apply(effect, rt.ground.bindings, rt.step.duration)
+        ctx.knowledge.apply(effect, GROUND, rt.step.duration)
         ctx.action_ended(rt)
         return Status.SUCCESS
 

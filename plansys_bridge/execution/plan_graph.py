@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Literal, TypeAlias
 
 import networkx as nx
@@ -56,6 +57,7 @@ from plansys_bridge.planning.plan import Plan, PlanStep
 
 __all__ = [
     "END",
+    "GROUND",
     "START",
     "Ordering",
     "PlanGraph",
@@ -66,6 +68,10 @@ __all__ = [
     "condition_text",
     "describe_unmet",
 ]
+
+GROUND: Mapping[str, str] = MappingProxyType({})
+"""Bindings for a ground action's conditions and effects: none, the evaluator
+substituted its arguments already (passing them again only costs time)."""
 
 Point: TypeAlias = Literal["start", "end"]
 START: Point = "start"
@@ -308,9 +314,9 @@ class _Builder:
             dur = self.steps[i].duration
             point_cond = g.at_end if is_end else g.at_start
             when: When = "at end" if is_end else "at start"
-            for var in self._condition_vars(point_cond, g.bindings, state):
+            for var in self._condition_vars(point_cond, GROUND, state):
                 self._read(var, h, h)
-            if not self.ev.holds(point_cond, state, g.bindings, dur):
+            if not self.ev.holds(point_cond, state, GROUND, dur):
                 self._unexplained(i, when, point_cond, g, state)
             if is_end:
                 # the over-all interval closes before the end effects
@@ -318,16 +324,16 @@ class _Builder:
                     watchers.get(var, set()).discard(i)
             effect = g.end_effect if is_end else g.start_effect
             touched = self._effect(effect, g, h, state)
-            state = self.ev.apply(effect, state, g.bindings, dur)
+            state = self.ev.apply(effect, state, GROUND, dur)
             added, written = touched
             for atom in added:
                 if atom in state:
                     self.achievers[atom] = i
             if not is_end:
-                ovars = self._condition_vars(g.over_all, g.bindings, state)
+                ovars = self._condition_vars(g.over_all, GROUND, state)
                 for var in ovars:
                     self._read(var, h, h + 1)
-                if not self.ev.holds(g.over_all, state, g.bindings, dur):
+                if not self.ev.holds(g.over_all, state, GROUND, dur):
                     self._unexplained(i, "over all", g.over_all, g, state)
                 else:
                     open_over_all[i] = ovars
@@ -339,7 +345,7 @@ class _Builder:
                     if j == i:
                         continue
                     gj = ground[j]
-                    if not self.ev.holds(gj.over_all, state, gj.bindings, self.steps[j].duration):
+                    if not self.ev.holds(gj.over_all, state, GROUND, self.steps[j].duration):
                         self._unexplained(
                             j,
                             "over all",
@@ -370,12 +376,12 @@ class _Builder:
         self, effect: Effect, g: GroundAction, h: int, state: State
     ) -> tuple[set[Atom], set[_Var]]:
         """Record the effect's accesses; returns (atoms added, variables written)."""
-        adds, deletes, numeric = self.ev.effect_atoms(effect, g.bindings, state)
+        adds, deletes, numeric = self.ev.effect_atoms(effect, GROUND, state)
         written: set[_Var] = set()
         read: set[_Var] = set()
         # conditions of conditional effects and values of numeric effects are reads
         ops: dict[FluentKey, str] = {}
-        for sub, binds in _walk_effect(effect, g.bindings):
+        for sub, binds in _walk_effect(effect, GROUND):
             if isinstance(sub, WhenEffect):
                 read |= self._condition_vars(sub.condition, binds, state)
             elif isinstance(sub, NumericEffect):
@@ -463,7 +469,7 @@ class _Builder:
         state: State,
         detail: str = "",
     ) -> None:
-        text = describe_unmet(self.ev, cond, state, g.bindings, self.steps[i].duration)
+        text = describe_unmet(self.ev, cond, state, GROUND, self.steps[i].duration)
         self.unexplained.append(UnexplainedRequirement(i, self.steps[i].text, when, text, detail))
 
     # ------------------------------------------------------------ result
