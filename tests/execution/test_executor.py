@@ -837,3 +837,36 @@ def test_after_a_failure_running_actions_finish_or_are_halted(
         assert patrol.status == ActionStatus.SUCCEEDED and patrol.end == pytest.approx(20.0)
         assert k.exist_predicate("(patrolled hall)")
     assert k.exist_predicate("(robot_at r2d2 kitchen)")
+
+
+def test_factory4_sequential_classical_plan_is_run_in_parallel() -> None:
+    """A classical planner orders everything; the graph finds what may overlap."""
+    domain = load_domain("factory4.pddl")
+    k = knowledge_from(domain, "problem_factory_1.pddl")
+    for robot in FACTORY_ROBOTS:
+        k.add_predicate(f"(battery_full {robot})")
+    sequential = [
+        "(move robot1 assembly_zone body_car_zone)",
+        "(move robot2 assembly_zone steering_wheels_zone)",
+        "(move robot3 assembly_zone wheels_zone)",
+        "(transport robot1 body_car_1 body_car_zone assembly_zone)",
+        "(transport robot2 steering_wheel_1 steering_wheels_zone assembly_zone)",
+        "(transport robot3 wheel_1 wheels_zone assembly_zone)",
+        "(assemble robot3 assembly_zone wheel_1 body_car_1 steering_wheel_1 car_1)",
+    ]
+    plan = parse_plan("".join(f"{i}: {a}\n" for i, a in enumerate(sequential)))
+    names = ["move", "transport", "assemble"]
+    performers = per_robot_performers(FACTORY_ROBOTS, names, dict.fromkeys(names, 5.0))
+    run = run_scenario(domain, k, execute(plan), performers)
+    res = run.result
+    assert res.success, res.message
+    assert [(a.start, a.end) for a in res.actions] == [
+        (0.0, 5.0),
+        (0.0, 5.0),
+        (0.0, 5.0),
+        (5.0, 10.0),
+        (5.0, 10.0),
+        (5.0, 10.0),
+        (10.0, 15.0),
+    ]
+    assert k.exist_predicate("(car_assembled car_1)")

@@ -268,3 +268,18 @@ def test_the_linearisation_check_catches_a_graph_without_orderings() -> None:
     unordered = dataclasses.replace(graph, orderings=())
     rng = random.Random(1)
     assert any(_random_linearisation_is_valid(unordered, domain, k.state(), rng) for _ in range(5))
+
+
+def test_factory2_move_contradicts_itself_and_is_rejected_before_it_starts() -> None:
+    """factory2's move deletes (robot_available ?r) at start yet needs it over all."""
+    domain = load_domain("factory2.pddl")
+    k = knowledge_from(domain, "problem_factory_1.pddl")
+    graph = build_plan_graph(parse_plan(FACTORY_PLAN), domain, k.state())
+    with pytest.raises(PlanGraphError) as info:
+        graph.check()
+    first = info.value.problems[0]
+    assert (first.step, first.when, first.requirement) == (
+        0,
+        "over all",
+        "(robot_available robot3)",
+    )
