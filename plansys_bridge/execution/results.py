@@ -6,7 +6,8 @@ expected outcomes a mission runner reports, not programming errors.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
+from typing import Any
 
 from plansys_bridge.hub.messages import ActionStatus
 from plansys_bridge.planning.plan import Plan
@@ -50,6 +51,13 @@ class ActionRecord:
             return 0.0
         return max(0.0, self.end - begin)
 
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data for JSON reports (``status`` as its PlanSys2 name)."""
+        data = asdict(self)
+        data["status"] = self.status.name
+        data["execution_time"] = self.execution_time
+        return data
+
 
 @dataclass
 class ExecutionResult:
@@ -88,6 +96,23 @@ class ExecutionResult:
     @property
     def efficiency_percent(self) -> float:
         return 100.0 * self.efficiency()
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data for JSON reports; plans in PlanSys2's text format."""
+        return {
+            "plan_id": self.plan_id,
+            "success": self.success,
+            "status": self.status,
+            "message": self.message,
+            "replans": self.replans,
+            "failures": self.failures,
+            "started": self.started,
+            "finished": self.finished,
+            "total_time_s": self.total_time,
+            "efficiency_percent": self.efficiency_percent,
+            "plans": [p.to_text() for p in self.plans],
+            "actions": [a.to_dict() for a in self.actions],
+        }
 
     def summary(self) -> str:
         """A readable report: outcome line, then one line per action."""

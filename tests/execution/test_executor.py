@@ -870,3 +870,16 @@ def test_factory4_sequential_classical_plan_is_run_in_parallel() -> None:
         (10.0, 15.0),
     ]
     assert k.exist_predicate("(car_assembled car_1)")
+
+
+def test_result_as_plain_data(simple: tuple[Domain, ProblemExpert]) -> None:
+    import json
+
+    domain, k = simple
+    res = run_scenario(domain, k, execute(SIMPLE_PLAN, plan_id="j"), SIMPLE_PERFORMERS).result
+    data = json.loads(json.dumps(res.to_dict()))
+    assert data["status"] == "succeeded" and data["plan_id"] == "j"
+    assert data["plans"] == [SIMPLE_PLAN.to_text()]
+    assert data["actions"][1]["status"] == "SUCCEEDED"
+    assert data["actions"][1]["execution_time"] == pytest.approx(5.0)
+    assert data["efficiency_percent"] == pytest.approx(100.0)
