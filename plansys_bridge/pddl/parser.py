@@ -177,8 +177,8 @@ def _error_offset(exc: UnexpectedInput) -> int | None:
 def _parse(text: str, start: str, filename: str) -> Any:
     """Run the LALR parser; lark errors become PddlSyntaxError with a snippet."""
     lowered = _lower(text)
-    parser = _get_driver()
     with _lock:
+        parser = _get_driver()
         _builder.file = filename
         try:
             try:
