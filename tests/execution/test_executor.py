@@ -883,3 +883,26 @@ def test_result_as_plain_data(simple: tuple[Domain, ProblemExpert]) -> None:
     assert data["actions"][1]["status"] == "SUCCEEDED"
     assert data["actions"][1]["execution_time"] == pytest.approx(5.0)
     assert data["efficiency_percent"] == pytest.approx(100.0)
+
+
+def test_cancelling_the_execute_task_stops_performers_and_rolls_back(
+    simple: tuple[Domain, ProblemExpert],
+) -> None:
+    domain, k = simple
+
+    async def with_timeout(executor: Executor) -> ExecutionResult:
+        with pytest.raises(TimeoutError):
+            await asyncio.wait_for(executor.execute(SIMPLE_PLAN, plan_id="t"), 4.0)
+        assert executor.running == []
+        await asyncio.sleep(0.1)  # let the CANCEL reach the performer
+        return ExecutionResult(success=True, status="checked")
+
+    run = run_scenario(domain, k, with_timeout, SIMPLE_PERFORMERS, topics=ALL_TOPICS)
+    assert run.result.status == "checked"
+    cancels = [
+        m.request_id
+        for m in run.of_topic(Topics.ACTIONS_HUB)
+        if isinstance(m, ActionExecution) and m.type == ExecutionType.CANCEL
+    ]
+    assert cancels == ["t/0/1"]
+    assert k.exist_predicate("(robot_at r2d2 kitchen)") and k.exist_predicate("(patrolled kitchen)")
