@@ -53,6 +53,10 @@ class ActionNodes:
     Attributes a template may read: ``action`` (name), ``arguments``, ``text``
     (``(move r1 a b)``), ``index`` (plan step), ``duration`` (planned),
     ``ground`` (the ground action: conditions and effects), ``context``.
+
+    The tree is ticked only when something happens, so a custom behaviour that
+    must be looked at again later asks for it: ``context.schedule(mission_time)``
+    (a timer) or ``context.wake()`` (as soon as possible, from the loop's thread).
     """
 
     def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
