@@ -51,7 +51,7 @@ from plansys_bridge.errors import ExecutionError, PlansysBridgeError
 from plansys_bridge.execution.behaviours import PlanContext
 from plansys_bridge.execution.dot import plan_graph_to_dot
 from plansys_bridge.execution.options import ExecutorOptions
-from plansys_bridge.execution.plan_graph import PlanGraph, PlanGraphError, build_plan_graph
+from plansys_bridge.execution.plan_graph import PlanGraph, build_plan_graph
 from plansys_bridge.execution.results import ExecutionResult
 from plansys_bridge.execution.tree_builder import build_tree
 from plansys_bridge.hub.hub import Hub
@@ -181,10 +181,7 @@ class Executor:
             try:
                 graph = self.build_graph(current)
                 graph.check()
-            except PlanGraphError as exc:
-                result.status, result.message = "rejected", str(exc)
-                return
-            except ExecutionError as exc:
+            except ExecutionError as exc:  # PlanGraphError, or an unknown action
                 result.status, result.message = "rejected", str(exc)
                 return
             ctx = PlanContext(
