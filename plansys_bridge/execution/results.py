@@ -44,12 +44,16 @@ class ActionRecord:
 
     @property
     def execution_time(self) -> float:
-        """How long a performer worked on the action: from its confirmation (or the
-        action's start if none was confirmed) to the end; 0 if it never started."""
-        begin = self.confirmed if self.confirmed is not None else self.start
-        if begin is None or self.end is None:
+        """How long a performer worked on the action: from its confirmation to the
+        end. An action no performer was confirmed for counts 0, unless it succeeded
+        anyway (a template that runs it without a performer): then start to end."""
+        if self.end is None:
             return 0.0
-        return max(0.0, self.end - begin)
+        if self.confirmed is not None:
+            return max(0.0, self.end - self.confirmed)
+        if self.status == ActionStatus.SUCCEEDED and self.start is not None:
+            return max(0.0, self.end - self.start)
+        return 0.0
 
     def to_dict(self) -> dict[str, Any]:
         """Plain data for JSON reports (``status`` as its PlanSys2 name)."""
