@@ -10,13 +10,13 @@ are run on the PDDL the project's writer produces, never on the original text.
 
 from __future__ import annotations
 
-import os
-import re
 import subprocess
 import sys
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
+
+from pddl_corpus import files, is_broken, rel
 
 from plansys_bridge.errors import PddlError
 from plansys_bridge.pddl.model import Domain, Problem
@@ -25,48 +25,8 @@ from plansys_bridge.planning.plan import Plan
 from plansys_bridge.planning.solvers import PlanningTask
 
 
-def _find_corpus() -> Path | None:
-    env = os.environ.get("PLANSYS_BRIDGE_FIXTURES")
-    here = Path(__file__).resolve()
-    candidates = [Path(env)] if env else []
-    candidates += [
-        here.parents[3] / "shared" / "fixtures" / "plansys2",
-        here.parents[1] / "fixtures" / "plansys2",
-    ]
-    return next((c for c in candidates if c.is_dir()), None)
-
-
-CORPUS = _find_corpus()
-_KIND = re.compile(r"\(\s*define\s*\(\s*(domain|problem)\b", re.IGNORECASE)
-_BROKEN = {
-    "ros2_planning_system/plansys2_domain_expert/test/pddl/domain_simple_derived.pddl",
-    "ros2_planning_system/plansys2_domain_expert/test/pddl/domain_simple_derived_processed.pddl",
-}
-
-
-def rel(path: Path) -> str:
-    assert CORPUS is not None
-    return path.relative_to(CORPUS).as_posix()
-
-
-def _broken(path: Path) -> bool:
-    name = path.name
-    return (
-        "error" in name
-        or name in ("problem_unexpected_syntax.pddl", "problem_simple_3.pddl")
-        or rel(path) in _BROKEN
-    )
-
-
-def _files(kind: str) -> list[Path]:
-    if CORPUS is None:
-        return []
-    out = []
-    for path in sorted(CORPUS.rglob("*.pddl")):
-        match = _KIND.search(path.read_text(encoding="utf-8"))
-        if match and match.group(1).lower() == kind and not _broken(path):
-            out.append(path)
-    return out
+def _files(which: str) -> list[Path]:
+    return [p for p in files(which) if not is_broken(p)]
 
 
 @cache

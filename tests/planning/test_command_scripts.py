@@ -13,7 +13,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from planning_corpus import CORPUS
+from pddl_corpus import CORPUS
 
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.knowledge.problem_expert import ProblemExpert

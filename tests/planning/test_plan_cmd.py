@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 import tasks
-from planning_corpus import CORPUS
+from pddl_corpus import CORPUS
 
 from plansys_bridge.cli import plan_cmd
 from plansys_bridge.errors import PddlError

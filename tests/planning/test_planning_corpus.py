@@ -13,8 +13,8 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from pddl_corpus import CORPUS
 from planning_corpus import (
-    CORPUS,
     Task,
     kairos_binary,
     kairos_verdict,

@@ -1,5 +1,7 @@
 """Where PlanSys2's PDDL corpus lives and which of its files must be rejected.
 
+Shared by every test folder (tests/ is on the import path through its conftest).
+
 The corpus (../shared/fixtures/plansys2, or $PLANSYS_BRIDGE_FIXTURES) keeps the
 repository-relative paths of PlanSys2's repositories. The broken files are the
 ones its README lists.
@@ -21,8 +23,7 @@ def _find_corpus() -> Path | None:
     candidates = [Path(env)] if env else []
     here = Path(__file__).resolve()
     candidates += [
-        here.parents[3] / "shared" / "fixtures" / "plansys2",
-        here.parents[1] / "fixtures" / "plansys2",
+        here.parents[2] / "shared" / "fixtures" / "plansys2",
     ]
     return next((c for c in candidates if c.is_dir()), None)
 
