@@ -38,13 +38,7 @@ from plansys_bridge.execution.plan_graph import (
 from plansys_bridge.execution.results import ActionRecord
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome
 from plansys_bridge.hub.hub import Hub
-from plansys_bridge.hub.messages import (
-    ActionExecution,
-    ActionExecutionInfo,
-    ActionStatus,
-    ExecutionType,
-    Topics,
-)
+from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, Topics
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import Atom, Condition, Effect, FluentRef, FluentValue
@@ -206,7 +200,6 @@ class PlanContext:
         self.active: set[int] = {i for i in range(len(self.actions)) if not graph.waits(i, START)}
         """Branches worth ticking: not parked waiting for a predecessor."""
         self.unfinished = len(self.actions)
-        self.by_request = {rt.record.request_id: rt for rt in self.actions}
         self._deadlines: list[float] = []
         self._wake: Callable[[], None] = lambda: None
 
@@ -321,13 +314,12 @@ class PlanContext:
         rec.reauctioned = outcome.reauctioned
         self.progress = True
 
-    def on_hub_message(self, msg: object) -> None:
-        """Stamp the CONFIRM of this plan's actions (when a performer's work begins)."""
-        if isinstance(msg, ActionExecution) and msg.type == ExecutionType.CONFIRM:
-            rt = self.by_request.get(msg.request_id)
-            if rt is not None and rt.record.confirmed is None:
-                rt.record.confirmed = self.now()
-                rt.record.performer = msg.node_id
+    def confirmed(self, rt: ActionRuntime, node: str) -> None:
+        """A performer was confirmed for the action: its work begins (first confirm
+        kept; a re-auction only changes the performer)."""
+        if rt.record.confirmed is None:
+            rt.record.confirmed = self.now()
+        rt.record.performer = node
 
     def feedback(self, rt: ActionRuntime, completion: float, status: str) -> None:
         rt.record.completion = completion
@@ -554,7 +546,10 @@ class ExecuteAction(ActionBehaviour):
         )
         rt.client = self.client
         self.task = asyncio.get_running_loop().create_task(
-            self.client.run(lambda c, s: ctx.feedback(rt, c, s)),
+            self.client.run(
+                lambda c, s: ctx.feedback(rt, c, s),
+                confirm_cb=lambda node: ctx.confirmed(rt, node),
+            ),
             name=f"execute {rt.record.request_id}",
         )
         ctx.track(self.task)

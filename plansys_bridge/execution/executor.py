@@ -272,7 +272,6 @@ class Executor:
 
         ctx.bind_wake(event.set)
         unsubscribe = self.knowledge.subscribe(from_knowledge)
-        confirms = self.hub.subscribe(Topics.ACTIONS_HUB, ctx.on_hub_message)
         goal_atoms = self._goal_atoms(goal)
         clock = self.hub.clock
         try:
@@ -315,7 +314,6 @@ class Executor:
             raise
         finally:
             unsubscribe()
-            confirms.close()
             ctx.bind_wake(lambda: None)
             if self.options.publish_dot and ctx.changed:
                 self._publish_dot(ctx, goal_atoms)
