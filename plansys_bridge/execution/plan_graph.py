@@ -38,6 +38,7 @@ from plansys_bridge.errors import ExecutionError
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import (
+    TRUE,
     And,
     AndEffect,
     Atom,
@@ -381,7 +382,7 @@ class _Builder:
         read: set[_Var] = set()
         # conditions of conditional effects and values of numeric effects are reads
         ops: dict[FluentKey, str] = {}
-        for sub, binds in _walk_effect(effect, GROUND):
+        for sub, binds in _walk_effect(effect, GROUND, self.ev, state):
             if isinstance(sub, WhenEffect):
                 read |= self._condition_vars(sub.condition, binds, state)
             elif isinstance(sub, NumericEffect):
@@ -570,18 +571,19 @@ def _numeric_class(op: str) -> str:
 
 
 def _walk_effect(
-    effect: Effect, bindings: Mapping[str, str]
+    effect: Effect, bindings: Mapping[str, str], ev: Evaluator, state: State
 ) -> Iterator[tuple[Effect, Mapping[str, str]]]:
-    """Sub-effects with their bindings (``forall`` bodies whose variables stay unbound
-    are skipped: their reads and numeric targets are taken conservatively)."""
+    """Sub-effects with their bindings; a ``forall`` is expanded over the objects of
+    its variables' types in ``state`` (as the evaluator applies it)."""
     if isinstance(effect, AndEffect):
         for sub in effect.effects:
-            yield from _walk_effect(sub, bindings)
+            yield from _walk_effect(sub, bindings, ev, state)
     elif isinstance(effect, WhenEffect):
         yield effect, bindings
-        yield from _walk_effect(effect.effect, bindings)
+        yield from _walk_effect(effect.effect, bindings, ev, state)
     elif isinstance(effect, ForallEffect):
-        return
+        for found in ev.satisfying_bindings(TRUE, state, effect.variables, bindings):
+            yield from _walk_effect(effect.effect, {**bindings, **found}, ev, state)
     else:
         yield effect, bindings
 

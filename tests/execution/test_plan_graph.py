@@ -17,6 +17,7 @@ from plansys_bridge.execution.dot import plan_graph_to_dot
 from plansys_bridge.execution.plan_graph import PlanGraphError, build_plan_graph
 from plansys_bridge.hub.messages import ActionStatus
 from plansys_bridge.pddl.model import Atom
+from plansys_bridge.pddl.parser import parse_domain
 from plansys_bridge.planning.plan import parse_plan
 
 FACTORY_PLAN = """
@@ -283,3 +284,37 @@ def test_factory2_move_contradicts_itself_and_is_rejected_before_it_starts() -> 
         "over all",
         "(robot_available robot3)",
     )
+
+
+def test_conditions_of_conditional_effects_under_forall_are_protected() -> None:
+    """``clean`` reads (dirty ?x) for every room through a forall/when effect; an action
+    that later makes a room dirty must wait for it, or the room might stay dirty."""
+    domain = parse_domain(
+        """
+        (define (domain house)
+          (:requirements :typing :durative-actions :conditional-effects :universal-preconditions)
+          (:types robot room)
+          (:predicates (dirty ?x - room) (clean ?x - room) (at ?r - robot ?x - room))
+          (:durative-action clean_all
+            :parameters (?r - robot)
+            :duration (= ?duration 5)
+            :condition (and)
+            :effect (forall (?x - room)
+                      (at end (when (dirty ?x) (and (clean ?x) (not (dirty ?x)))))))
+          (:durative-action mess
+            :parameters (?r - robot ?x - room)
+            :duration (= ?duration 2)
+            :condition (at start (at ?r ?x))
+            :effect (at end (dirty ?x))))
+        """
+    )
+    k = knowledge_from(
+        domain,
+        instances={"vac": "robot", "kid": "robot", "hall": "room", "kitchen": "room"},
+        facts=["(dirty hall)", "(at kid kitchen)"],
+    )
+    plan = parse_plan("0: (clean_all vac) [5]\n5.001: (mess kid kitchen) [2]\n")
+    graph = build_plan_graph(plan, domain, k.state())
+    graph.check()
+    assert graph.waits(1, "end") == ((0, "end"),)
+    assert "(dirty kitchen)" in graph.graph.edges[0, 1]["reason"]
