@@ -1,0 +1,449 @@
+"""The hub over Eclipse Cyclone DDS, so executor and performers can run in separate processes.
+
+:class:`DdsTransport` implements :class:`~plansys_bridge.hub.transport.Transport`. Hub
+topics travel as ROS 2 would carry PlanSys2's messages (``rt/actions_hub`` with type
+``plansys2_msgs::msg::dds_::ActionExecution_``, XCDR1, reliable, depth 100), plus
+the project's wrapper topics for fields PlanSys2 lacks (see
+:mod:`plansys_bridge.hub.dds_codec`). Each process joins a DDS domain configured by
+:func:`~plansys_bridge.hub.dds_config.loopback_config`: loopback only, no multicast.
+
+Delivery: one reader thread per transport waits on a DDS wait set, takes the samples
+of every topic, and hands each topic's batch to the asyncio loop with
+``call_soon_threadsafe``, so callbacks run on the loop, in arrival order per topic
+(DDS orders per writer; messages of different topics or writers may interleave
+differently than in the in-process transport). A message a process publishes reaches
+its own subscribers through DDS as well.
+
+Duplicates: on a topic with a project wrapper, a project process writes both the
+plain message and the wrapper. Its plain writers carry a USER_DATA marker; receivers
+skip plain samples from marked writers and take the complete message from the
+wrapper topic, while plain samples from other DDS nodes are delivered as they are.
+
+Topics without a DDS type (an adapter's own topic) are delivered inside the process
+only, as the in-process transport would; the first such publish logs a warning.
+
+DDS needs the wall clock: the virtual clock jumps over idle time, which would expire
+every protocol timeout while a message is still in flight between processes.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from cyclonedds.core import (
+    DDSException,
+    GuardCondition,
+    InstanceState,
+    Policy,
+    Qos,
+    ReadCondition,
+    SampleState,
+    ViewState,
+    WaitSet,
+)
+from cyclonedds.domain import Domain, DomainParticipant
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+from cyclonedds.topic import Topic
+from cyclonedds.util import duration
+
+from plansys_bridge.clock import VirtualTimeEventLoop
+from plansys_bridge.errors import HubError
+from plansys_bridge.hub.dds_codec import ROUTES, Channel, Route, decode, encode
+from plansys_bridge.hub.dds_config import check_domain_id, loopback_config
+from plansys_bridge.hub.messages import Topics
+from plansys_bridge.hub.transport import Subscription
+
+__all__ = ["PROJECT_MARKER", "DdsTransport"]
+
+log = logging.getLogger(__name__)
+
+Callback = Callable[[object], None]
+
+PROJECT_MARKER = b"plansys_bridge"
+"""USER_DATA of this project's plain-topic writers (their messages also go wrapped)."""
+
+_TAKE_BATCH = 64
+_WAIT_NS = duration(seconds=1)
+_ANY_SAMPLE = SampleState.Any | ViewState.Any | InstanceState.Any
+
+
+class _SharedDomain:
+    """One Cyclone domain per id and process, shared by the transports that use it.
+
+    ``dds_create_domain`` refuses a second creation of the same id in one process, so
+    transports of one process (tests, benchmarks) share it, with a reference count.
+    """
+
+    _lock = threading.Lock()
+    _domains: dict[int, tuple[Domain, str, int]] = {}
+
+    @classmethod
+    def acquire(cls, domain_id: int, config: str) -> None:
+        with cls._lock:
+            entry = cls._domains.get(domain_id)
+            if entry is not None:
+                domain, existing, count = entry
+                if existing != config:
+                    raise HubError(
+                        f"DDS domain {domain_id} is already open in this process with "
+                        "another configuration"
+                    )
+                cls._domains[domain_id] = (domain, existing, count + 1)
+                return
+            try:
+                domain = Domain(domain_id, config)
+            except DDSException as exc:
+                raise HubError(f"cannot create DDS domain {domain_id}: {exc}") from exc
+            cls._domains[domain_id] = (domain, config, 1)
+
+    @classmethod
+    def release(cls, domain_id: int) -> None:
+        with cls._lock:
+            entry = cls._domains.get(domain_id)
+            if entry is None:
+                return
+            domain, config, count = entry
+            if count > 1:
+                cls._domains[domain_id] = (domain, config, count - 1)
+                return
+            del cls._domains[domain_id]
+            _delete(domain)
+
+
+def _delete(entity: Any) -> None:
+    """Delete a DDS entity now instead of whenever the garbage collector gets to it."""
+    entity.__del__()
+
+
+@dataclass
+class _Endpoint:
+    """The DDS entities of one channel."""
+
+    route: Route
+    channel: Channel
+    topic: Any
+    writer: Any
+    reader: Any
+    condition: Any
+
+
+class _DdsSubscription:
+    __slots__ = ("callback", "closed", "topic", "transport")
+
+    def __init__(self, transport: DdsTransport, topic: str, callback: Callback) -> None:
+        self.transport = transport
+        self.topic = topic
+        self.callback = callback
+        self.closed = False
+
+    def close(self) -> None:
+        if not self.closed:
+            self.closed = True
+            self.transport._remove(self)
+
+    def __repr__(self) -> str:
+        return f"<DdsSubscription {self.topic!r} {'closed' if self.closed else 'open'}>"
+
+
+def _qos(depth: int, *, marked: bool) -> Qos:
+    policies: list[Any] = [
+        Policy.Reliability.Reliable(duration(seconds=1)),
+        Policy.History.KeepLast(depth),
+        Policy.Durability.Volatile,
+        # ROS 2 (rmw_cyclonedds) speaks XCDR1; say so rather than rely on defaults.
+        Policy.DataRepresentation(use_cdrv0_representation=True),
+    ]
+    if marked:
+        policies.append(Policy.Userdata(PROJECT_MARKER))
+    return Qos(*policies)
+
+
+class DdsTransport:
+    """Hub topics on a Cyclone DDS domain (loopback-only configuration by default).
+
+    ``domain_id`` keeps unrelated runs apart (tests pick a random one); ``config`` is
+    Cyclone XML and defaults to :func:`loopback_config` for that domain. Start it on the
+    running loop before publishing; ``close()`` stops the reader thread and deletes
+    every DDS entity.
+    """
+
+    def __init__(self, domain_id: int = 0, *, config: str | None = None) -> None:
+        self.domain_id = check_domain_id(domain_id)
+        self.config = config if config is not None else loopback_config(domain_id)
+        self._subscribers: dict[str, list[_DdsSubscription]] = {}
+        self._endpoints: list[_Endpoint] = []
+        self._writers: dict[str, tuple[Any, Any]] = {}
+        self._marked: dict[int, bool] = {}
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._participant: Any = None
+        self._waitset: Any = None
+        self._guard: Any = None
+        self._thread: threading.Thread | None = None
+        self._stopping = False
+        self._domain_held = False
+        self._closed = False
+        self._warned_local: set[str] = set()
+        self.published = 0
+        """Messages published so far (all topics), for statistics."""
+        self.dropped = 0
+        """Samples received that could not be turned into hub messages."""
+
+    # -- lifecycle ---------------------------------------------------------------------
+    async def start(self) -> None:
+        if self._closed:
+            raise HubError("cannot start a closed DDS transport")
+        if self._thread is not None:
+            return
+        loop = asyncio.get_running_loop()
+        if isinstance(loop, VirtualTimeEventLoop):
+            raise HubError(
+                "the DDS transport needs the wall clock: the virtual clock would expire "
+                "protocol timeouts while messages travel between processes"
+            )
+        self._loop = loop
+        try:
+            self._open()
+        except BaseException:
+            self._teardown()
+            raise
+        self._thread = threading.Thread(
+            target=self._read_loop, name=f"dds-hub-{self.domain_id}", daemon=True
+        )
+        self._thread.start()
+
+    def _open(self) -> None:
+        _SharedDomain.acquire(self.domain_id, self.config)
+        self._domain_held = True
+        try:
+            self._participant = DomainParticipant(self.domain_id)
+            self._waitset = WaitSet(self._participant)
+            self._guard = GuardCondition(self._participant)
+            self._waitset.attach(self._guard)
+            for route in ROUTES.values():
+                writers = []
+                for channel in route.channels:
+                    endpoint = self._endpoint(route, channel)
+                    self._endpoints.append(endpoint)
+                    writers.append(endpoint.writer)
+                self._writers[route.hub_topic] = (
+                    writers[0],
+                    writers[1] if len(writers) > 1 else None,
+                )
+        except DDSException as exc:
+            raise HubError(f"DDS domain {self.domain_id}: cannot create endpoints: {exc}") from exc
+
+    def _endpoint(self, route: Route, channel: Channel) -> _Endpoint:
+        p = self._participant
+        topic = Topic(p, channel.dds_topic, channel.idl_type)
+        marked = not channel.project and route.project is not None
+        writer = DataWriter(p, topic, _qos(channel.depth, marked=marked))
+        reader = DataReader(p, topic, _qos(channel.depth, marked=False))
+        condition = ReadCondition(reader, _ANY_SAMPLE)
+        self._waitset.attach(condition)
+        return _Endpoint(route, channel, topic, writer, reader, condition)
+
+    async def close(self) -> None:
+        self._closed = True
+        for subs in self._subscribers.values():
+            for sub in subs:
+                sub.closed = True
+        self._subscribers.clear()
+        self._teardown()
+
+    def _teardown(self) -> None:
+        self._stopping = True
+        thread, self._thread = self._thread, None
+        if thread is not None:
+            self._guard.set(True)
+            thread.join(timeout=5.0)
+            if thread.is_alive():  # pragma: no cover - the wait set wakes within 1 s
+                log.error("DDS reader thread of domain %d did not stop", self.domain_id)
+        entities: list[Any] = []
+        for ep in self._endpoints:
+            entities += [ep.condition, ep.reader, ep.writer, ep.topic]
+        entities += [self._guard, self._waitset, self._participant]
+        for entity in entities:
+            if entity is not None:
+                _delete(entity)
+        self._endpoints.clear()
+        self._writers.clear()
+        self._guard = self._waitset = self._participant = None
+        if self._domain_held:
+            self._domain_held = False
+            _SharedDomain.release(self.domain_id)
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+    # -- publish / subscribe -----------------------------------------------------------
+    def subscribe(self, topic: str, callback: Callback) -> Subscription:
+        if self._closed:
+            raise HubError(f"cannot subscribe to {topic!r}: transport closed")
+        sub = _DdsSubscription(self, topic, callback)
+        subs = self._subscribers.get(topic)
+        self._subscribers[topic] = [*subs, sub] if subs else [sub]
+        return sub
+
+    def _remove(self, sub: _DdsSubscription) -> None:
+        subs = self._subscribers.get(sub.topic)
+        if subs and sub in subs:
+            remaining = [s for s in subs if s is not sub]
+            if remaining:
+                self._subscribers[sub.topic] = remaining
+            else:
+                del self._subscribers[sub.topic]
+
+    def subscriber_count(self, topic: str) -> int:
+        return len(self._subscribers.get(topic, ()))
+
+    def publish(self, topic: str, msg: object) -> None:
+        if self._closed:
+            raise HubError(f"cannot publish on {topic!r}: transport closed")
+        if self._thread is None or self._loop is None:
+            raise HubError(f"cannot publish on {topic!r}: start the DDS transport first")
+        route = ROUTES.get(topic)
+        if route is None:
+            self._publish_local(topic, msg)
+            return
+        plain, wrapped = encode(topic, msg)
+        plain_writer, project_writer = self._writers[topic]
+        try:
+            if wrapped is not None and project_writer is not None:
+                project_writer.write(wrapped)
+            plain_writer.write(plain)
+        except (DDSException, ValueError, TypeError, OverflowError) as exc:
+            raise HubError(
+                f"cannot publish {type(msg).__name__} on {route.plain.dds_topic}: {exc}"
+            ) from exc
+        self.published += 1
+
+    def _publish_local(self, topic: str, msg: object) -> None:
+        if topic not in self._warned_local:
+            self._warned_local.add(topic)
+            log.warning(
+                "topic %r has no DDS type: delivered inside this process only (DDS carries %s)",
+                topic,
+                ", ".join(ROUTES),
+            )
+        self.published += 1
+        assert self._loop is not None
+        self._loop.call_soon_threadsafe(self._deliver, topic, [msg])
+
+    async def wait_for_peers(
+        self, count: int = 1, *, topic: str = Topics.ACTIONS_HUB, timeout: float = 10.0
+    ) -> None:
+        """Wait until ``count`` other participants read ``topic`` (HubError on timeout).
+
+        DDS drops what is written before a reader is matched; a caller that must not
+        lose its first messages waits here (the auction re-sends REQUESTs anyway).
+        """
+        if self._thread is None:
+            raise HubError("start the DDS transport before waiting for peers")
+        route = ROUTES.get(topic)
+        if route is None:
+            raise HubError(f"topic {topic!r} has no DDS type")
+        writer = self._writers[topic][0]
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + timeout
+        while True:
+            # Our own reader of the topic is one of the matched subscriptions.
+            matched = writer.get_publication_matched_status().current_count - 1
+            if matched >= count:
+                return
+            if loop.time() >= deadline:
+                raise HubError(
+                    f"DDS domain {self.domain_id}: {matched} of {count} peers on "
+                    f"{route.plain.dds_topic} after {timeout:g} s"
+                )
+            await asyncio.sleep(0.02)
+
+    # -- receiving ---------------------------------------------------------------------
+    def _read_loop(self) -> None:
+        loop = self._loop
+        assert loop is not None
+        try:
+            while not self._stopping:
+                self._waitset.wait(_WAIT_NS)
+                if self._stopping:
+                    break
+                for ep in self._endpoints:
+                    batch = self._take(ep)
+                    if batch:
+                        loop.call_soon_threadsafe(self._deliver, ep.route.hub_topic, batch)
+        except RuntimeError:  # the loop closed under us: nobody is left to deliver to
+            return
+        except Exception:  # pragma: no cover - a DDS failure must not die silently
+            log.exception("DDS reader thread of domain %d failed", self.domain_id)
+
+    def _take(self, ep: _Endpoint) -> list[object]:
+        batch: list[object] = []
+        skip_marked = not ep.channel.project and ep.route.project is not None
+        while True:
+            try:
+                samples = ep.reader.take(N=_TAKE_BATCH)
+            except Exception as exc:  # a foreign writer's malformed sample
+                self.dropped += 1
+                log.warning("%s: cannot read a sample: %s", ep.channel.dds_topic, exc)
+                return batch
+            if not samples:
+                return batch
+            for sample in samples:
+                info = sample.sample_info
+                if not info.valid_data:
+                    continue
+                if skip_marked and self._from_project(ep.reader, info.publication_handle):
+                    continue
+                try:
+                    batch.append(decode(ep.channel, sample))
+                except (ValueError, TypeError) as exc:
+                    self.dropped += 1
+                    log.warning("%s: dropping a sample: %s", ep.channel.dds_topic, exc)
+
+    def _from_project(self, reader: Any, handle: int) -> bool:
+        """Whether the writer ``handle`` is a project writer (its message comes wrapped)."""
+        known = self._marked.get(handle)
+        if known is not None:
+            return known
+        endpoint = reader.get_matched_publication_data(handle)
+        if endpoint is None:
+            # The writer left before we looked: only project writers publish both
+            # copies and leave together with their wrapper, so assume it was one.
+            return True
+        try:
+            userdata = endpoint.qos[Policy.Userdata].data
+        except (KeyError, AttributeError):
+            userdata = b""
+        marked = userdata == PROJECT_MARKER
+        self._marked[handle] = marked
+        return marked
+
+    def _deliver(self, topic: str, batch: list[object]) -> None:
+        for msg in batch:
+            subs = self._subscribers.get(topic)
+            if not subs:
+                continue
+            for sub in subs:
+                if sub.closed:
+                    continue
+                try:
+                    sub.callback(msg)
+                except Exception as exc:
+                    assert self._loop is not None
+                    self._loop.call_exception_handler(
+                        {
+                            "message": f"subscriber of {topic!r} raised "
+                            f"{type(exc).__name__}: {exc}",
+                            "exception": exc,
+                        }
+                    )
+
+    def __repr__(self) -> str:
+        state = "closed" if self._closed else "started" if self._thread else "new"
+        return f"DdsTransport(domain_id={self.domain_id}, {state})"
