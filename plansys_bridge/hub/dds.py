@@ -8,8 +8,10 @@ the project's wrapper topics for fields PlanSys2 lacks (see
 :func:`~plansys_bridge.hub.dds_config.loopback_config`: loopback only, no multicast.
 
 Delivery: one reader thread per transport waits on a DDS wait set, takes the samples
-of every topic, and hands each topic's batch to the asyncio loop with
-``call_soon_threadsafe``, so callbacks run on the loop, in arrival order per topic
+of every topic, and hands each message to an
+:class:`~plansys_bridge.hub.transport.InProcessTransport` that fans it out to this
+process's subscribers on the asyncio loop (``call_soon_threadsafe``): callbacks run
+on the loop, in arrival order per topic
 (DDS orders per writer; messages of different topics or writers may interleave
 differently than in the in-process transport). A message a process publishes reaches
 its own subscribers through DDS as well.
@@ -57,7 +59,7 @@ from plansys_bridge.errors import HubError
 from plansys_bridge.hub.dds_codec import ROUTES, Channel, Route, decode, encode
 from plansys_bridge.hub.dds_config import check_domain_id, loopback_config
 from plansys_bridge.hub.messages import Topics
-from plansys_bridge.hub.transport import Subscription
+from plansys_bridge.hub.transport import InProcessTransport, Subscription
 
 __all__ = ["PROJECT_MARKER", "DdsTransport"]
 
@@ -133,24 +135,6 @@ class _Endpoint:
     condition: Any
 
 
-class _DdsSubscription:
-    __slots__ = ("callback", "closed", "topic", "transport")
-
-    def __init__(self, transport: DdsTransport, topic: str, callback: Callback) -> None:
-        self.transport = transport
-        self.topic = topic
-        self.callback = callback
-        self.closed = False
-
-    def close(self) -> None:
-        if not self.closed:
-            self.closed = True
-            self.transport._remove(self)
-
-    def __repr__(self) -> str:
-        return f"<DdsSubscription {self.topic!r} {'closed' if self.closed else 'open'}>"
-
-
 def _qos(depth: int, *, marked: bool) -> Qos:
     policies: list[Any] = [
         Policy.Reliability.Reliable(duration(seconds=1)),
@@ -176,7 +160,8 @@ class DdsTransport:
     def __init__(self, domain_id: int = 0, *, config: str | None = None) -> None:
         self.domain_id = check_domain_id(domain_id)
         self.config = config if config is not None else loopback_config(domain_id)
-        self._subscribers: dict[str, list[_DdsSubscription]] = {}
+        self._fanout = InProcessTransport()
+        """Local fan-out to this process's subscribers, on the loop, in arrival order."""
         self._endpoints: list[_Endpoint] = []
         self._writers: dict[str, tuple[Any, Any]] = {}
         self._marked: dict[int, bool] = {}
@@ -207,6 +192,7 @@ class DdsTransport:
                 "protocol timeouts while messages travel between processes"
             )
         self._loop = loop
+        await self._fanout.start()
         try:
             self._open()
         except BaseException:
@@ -250,10 +236,7 @@ class DdsTransport:
 
     async def close(self) -> None:
         self._closed = True
-        for subs in self._subscribers.values():
-            for sub in subs:
-                sub.closed = True
-        self._subscribers.clear()
+        await self._fanout.close()
         self._teardown()
 
     def _teardown(self) -> None:
@@ -286,22 +269,10 @@ class DdsTransport:
     def subscribe(self, topic: str, callback: Callback) -> Subscription:
         if self._closed:
             raise HubError(f"cannot subscribe to {topic!r}: transport closed")
-        sub = _DdsSubscription(self, topic, callback)
-        subs = self._subscribers.get(topic)
-        self._subscribers[topic] = [*subs, sub] if subs else [sub]
-        return sub
-
-    def _remove(self, sub: _DdsSubscription) -> None:
-        subs = self._subscribers.get(sub.topic)
-        if subs and sub in subs:
-            remaining = [s for s in subs if s is not sub]
-            if remaining:
-                self._subscribers[sub.topic] = remaining
-            else:
-                del self._subscribers[sub.topic]
+        return self._fanout.subscribe(topic, callback)
 
     def subscriber_count(self, topic: str) -> int:
-        return len(self._subscribers.get(topic, ()))
+        return self._fanout.subscriber_count(topic)
 
     def publish(self, topic: str, msg: object) -> None:
         if self._closed:
@@ -328,13 +299,13 @@ class DdsTransport:
         if topic not in self._warned_local:
             self._warned_local.add(topic)
             log.warning(
-                "topic %r has no DDS type: delivered inside this process only (DDS carries %s)",
+                "topic %r has no DDS type: delivered inside this process only "
+                "(DDS carries %s)",
                 topic,
                 ", ".join(ROUTES),
             )
         self.published += 1
-        assert self._loop is not None
-        self._loop.call_soon_threadsafe(self._deliver, topic, [msg])
+        self._fanout.publish(topic, msg)
 
     async def wait_for_peers(
         self, count: int = 1, *, topic: str = Topics.ACTIONS_HUB, timeout: float = 10.0
@@ -366,18 +337,16 @@ class DdsTransport:
 
     # -- receiving ---------------------------------------------------------------------
     def _read_loop(self) -> None:
-        loop = self._loop
-        assert loop is not None
         try:
             while not self._stopping:
                 self._waitset.wait(_WAIT_NS)
                 if self._stopping:
                     break
                 for ep in self._endpoints:
-                    batch = self._take(ep)
-                    if batch:
-                        loop.call_soon_threadsafe(self._deliver, ep.route.hub_topic, batch)
-        except RuntimeError:  # the loop closed under us: nobody is left to deliver to
+                    for msg in self._take(ep):
+                        # From this thread: handed to the loop with call_soon_threadsafe.
+                        self._fanout.publish(ep.route.hub_topic, msg)
+        except (RuntimeError, HubError):  # loop or transport closed: nobody to deliver to
             return
         except Exception:  # pragma: no cover - a DDS failure must not die silently
             log.exception("DDS reader thread of domain %d failed", self.domain_id)
@@ -423,26 +392,6 @@ class DdsTransport:
         marked = userdata == PROJECT_MARKER
         self._marked[handle] = marked
         return marked
-
-    def _deliver(self, topic: str, batch: list[object]) -> None:
-        for msg in batch:
-            subs = self._subscribers.get(topic)
-            if not subs:
-                continue
-            for sub in subs:
-                if sub.closed:
-                    continue
-                try:
-                    sub.callback(msg)
-                except Exception as exc:
-                    assert self._loop is not None
-                    self._loop.call_exception_handler(
-                        {
-                            "message": f"subscriber of {topic!r} raised "
-                            f"{type(exc).__name__}: {exc}",
-                            "exception": exc,
-                        }
-                    )
 
     def __repr__(self) -> str:
         state = "closed" if self._closed else "started" if self._thread else "new"
