@@ -652,7 +652,3 @@ class ActionBranch(py_trees.decorators.Decorator):
         if new_status == Status.INVALID:
             self.ctx.action_halted(self.rt)
 
-
-def behaviours_of(root: py_trees.behaviour.Behaviour) -> Sequence[py_trees.behaviour.Behaviour]:
-    """Every behaviour of a subtree, root first."""
-    return list(root.iterate())
