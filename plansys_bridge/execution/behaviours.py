@@ -18,7 +18,7 @@ from __future__ import annotations
 import asyncio
 import heapq
 import logging
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -651,4 +651,3 @@ class ActionBranch(py_trees.decorators.Decorator):
     def terminate(self, new_status: Status) -> None:
         if new_status == Status.INVALID:
             self.ctx.action_halted(self.rt)
-
