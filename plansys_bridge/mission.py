@@ -24,7 +24,7 @@ from plansys_bridge.execution.options import ExecutorOptions
 from plansys_bridge.execution.results import ExecutionResult
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, Topics
-from plansys_bridge.hub.transport import InProcessTransport
+from plansys_bridge.hub.transport import InProcessTransport, Transport
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.mission_config import EventConfig, MissionConfig
 from plansys_bridge.pddl.model import Domain
@@ -34,7 +34,14 @@ from plansys_bridge.performers.registry import performers_from_config
 from plansys_bridge.planning.plan import Plan
 from plansys_bridge.planning.planner import Planner
 
-__all__ = ["MissionReport", "MissionSession", "build_knowledge", "make_clock", "run_mission"]
+__all__ = [
+    "MissionReport",
+    "MissionSession",
+    "build_knowledge",
+    "make_clock",
+    "make_transport",
+    "run_mission",
+]
 
 log = logging.getLogger(__name__)
 
@@ -77,6 +84,21 @@ def make_clock(mission: MissionConfig) -> Clock:
     if mission.clock.kind == "virtual":
         return VirtualClock()
     return WallClock(time_scale=mission.clock.time_scale)
+
+
+def make_transport(mission: MissionConfig) -> Transport:
+    """The hub transport the mission's ``transport:`` names (DDS imported only then)."""
+    if mission.transport.kind == "dds":
+        try:
+            from plansys_bridge.hub.dds import DdsTransport
+        except ImportError as exc:
+            raise ConfigError(
+                f"the dds transport needs cyclonedds (pip install plansys-bridge[dds]): {exc}",
+                key="transport.kind",
+                file=mission.source,
+            ) from exc
+        return DdsTransport(mission.transport.domain_id)
+    return InProcessTransport()
 
 
 def build_knowledge(mission: MissionConfig, domain: Domain) -> ProblemExpert:
@@ -139,11 +161,14 @@ class MissionSession:
         *,
         out: Printer | None = None,
         performer_overrides: dict[str, Any] | None = None,
+        local_performers: bool = True,
     ) -> None:
         self.mission = mission
         self.domain = domain
         self.knowledge = knowledge
-        self.hub = Hub(InProcessTransport(), clock)
+        self.hub = Hub(make_transport(mission), clock)
+        self.local_performers = local_performers
+        """False: the performers run in other processes (DDS); wait for their heartbeats."""
         self.out = out
         self.performers: list[ActionPerformer] = []
         self.recorder: Any = None
@@ -169,9 +194,12 @@ class MissionSession:
                 recorder=self.recorder,
             )
             entries = [p.model_dump() | self._overrides for p in self.mission.performers]
-            self.performers = performers_from_config(entries, context)
+            if self.local_performers:
+                self.performers = performers_from_config(entries, context)
             for performer in self.performers:
                 await performer.start()
+            if not self.local_performers:
+                await self._wait_for_remote_performers()
             self.hub.publish(Topics.KNOWLEDGE, self.knowledge.to_msg())
             self._unsubscribe = self.knowledge.subscribe(
                 lambda _change: self.hub.publish(Topics.KNOWLEDGE, self.knowledge.to_msg())
@@ -186,6 +214,15 @@ class MissionSession:
 
     async def __aexit__(self, *exc: object) -> None:
         await self._shutdown()
+
+    async def _wait_for_remote_performers(self) -> None:
+        from plansys_bridge.performers.remote import wait_for_performers
+
+        names = [p.name for p in self.mission.performers]
+        self._say(f"waiting for performers {', '.join(names)} (dds)")
+        await wait_for_performers(
+            self.hub, names, timeout=self.mission.transport.peer_timeout, where=self.mission.source
+        )
 
     async def _shutdown(self) -> None:
         for task in self._tasks:
@@ -271,8 +308,13 @@ def run_mission(
     out: Printer | None = print,
     planner: Planner | None = None,
     plan: Plan | None = None,
+    local_performers: bool = True,
 ) -> MissionReport:
-    """Run ``mission`` to its end on the clock it names; prints progress to ``out``."""
+    """Run ``mission`` to its end on the clock it names; prints progress to ``out``.
+
+    ``local_performers=False`` runs the executor only: the performers are served by
+    ``plansys-bridge performers`` in other processes over the DDS transport.
+    """
     domain = parse_domain_files(mission.domain_paths)
     knowledge = build_knowledge(mission, domain)
     if knowledge.get_goal() is None:
@@ -283,7 +325,15 @@ def run_mission(
         )
     clock = make_clock(mission)
     planner = planner or Planner()
-    return run(_run(mission, domain, knowledge, clock, planner, plan, out), clock)
+    if not local_performers and mission.transport.kind != "dds":
+        raise ConfigError(
+            "performers in other processes need transport: {kind: dds}",
+            key="transport.kind",
+            file=mission.source,
+        )
+    return run(
+        _run(mission, domain, knowledge, clock, planner, plan, out, local_performers), clock
+    )
 
 
 async def _run(
@@ -294,6 +344,7 @@ async def _run(
     planner: Planner,
     plan: Plan | None,
     out: Printer | None,
+    local_performers: bool = True,
 ) -> MissionReport:
     t0 = clock.now()
 
@@ -301,11 +352,15 @@ async def _run(
         return clock.now() - t0
 
     say = out or (lambda _s: None)
-    async with MissionSession(mission, domain, knowledge, clock, out=say) as session:
-        say(
-            f"mission {mission.name}: {len(session.performers)} performers,"
-            f" clock {mission.clock.kind}"
+    async with MissionSession(
+        mission, domain, knowledge, clock, out=say, local_performers=local_performers
+    ) as session:
+        performers = (
+            f"{len(session.performers)} performers"
+            if local_performers
+            else f"{len(mission.performers)} remote performers"
         )
+        say(f"mission {mission.name}: {performers}, clock {mission.clock.kind}")
         planning_s = 0.0
         if plan is None:
             try:

@@ -41,7 +41,21 @@ class ClockConfig(_Strict):
 
 
 class TransportConfig(_Strict):
-    kind: Literal["inprocess"] = "inprocess"
+    """``inprocess``: one process; ``dds``: Cyclone DDS on loopback, so the performers
+    may run in other processes (``plansys-bridge performers MISSION.yaml``)."""
+
+    kind: Literal["inprocess", "dds"] = "inprocess"
+    domain_id: int = Field(0, ge=0, le=232)
+    """DDS domain; processes of one mission share it, other runs pick another."""
+    peer_timeout: float = Field(10.0, gt=0)
+    """With remote performers: seconds to wait for a heartbeat from each of them."""
+
+    @model_validator(mode="after")
+    def _dds_settings_need_dds(self) -> TransportConfig:
+        extra = sorted(self.model_fields_set & {"domain_id", "peer_timeout"})
+        if self.kind != "dds" and extra:
+            raise ValueError(f"{', '.join(extra)} applies to the dds transport only")
+        return self
 
 
 class KnowledgeConfig(_Strict):
@@ -109,6 +123,15 @@ class MissionConfig(_Strict):
     @classmethod
     def _domain_list(cls, value: Any) -> Any:
         return [value] if isinstance(value, str) else value
+
+    @model_validator(mode="after")
+    def _dds_needs_wall_clock(self) -> MissionConfig:
+        if self.transport.kind == "dds" and self.clock.kind == "virtual":
+            raise ValueError(
+                "the dds transport needs the wall clock (the virtual clock would expire "
+                "protocol timeouts while messages travel between processes)"
+            )
+        return self
 
     @model_validator(mode="after")
     def _has_goal(self) -> MissionConfig:

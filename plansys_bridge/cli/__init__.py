@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 from plansys_bridge.errors import PlansysBridgeError
 
-SUBCOMMANDS = ("validate", "plan", "run", "experiment", "terminal", "demo")
+SUBCOMMANDS = ("validate", "plan", "run", "experiment", "terminal", "demo", "performers")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -19,6 +19,12 @@ def register(sub: Any) -> None:
     p.add_argument("--clock", choices=("wall", "virtual"), help="override the mission's clock")
     p.add_argument("--time-scale", type=float, help="override clock.time_scale (wall clock)")
     p.add_argument("--record", help="record the run to this ROS 2 bag folder (mcap)")
+    p.add_argument(
+        "--no-performers",
+        action="store_true",
+        help="run the executor only; the performers run in other processes "
+        "(`plansys-bridge performers`, needs transport: {kind: dds})",
+    )
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("-q", "--quiet", action="store_true", help="print only the summary")
     p.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
@@ -45,7 +51,12 @@ def handle(args: argparse.Namespace) -> int:
         with open(args.plan, encoding="utf-8") as f:
             plan = parse_plan(f.read(), args.plan)
     quiet = args.quiet or args.json
-    report = run_mission(mission, out=None if quiet else print, plan=plan)
+    report = run_mission(
+        mission,
+        out=None if quiet else print,
+        plan=plan,
+        local_performers=not args.no_performers,
+    )
     if args.json:
         print(json.dumps(report_json(report), indent=2))
     else:

@@ -1,0 +1,93 @@
+"""``plansys-bridge performers MISSION.yaml``: serve a mission's performers on its DDS hub.
+
+The executor side runs elsewhere, e.g. ``plansys-bridge run MISSION.yaml
+--no-performers`` in another process (or on another terminal) with the same mission
+file, whose ``transport: {kind: dds, domain_id: N}`` puts both on one DDS domain.
+The command prints one ``performers ready: ...`` line once every performer is
+started, then serves auctions until interrupted (Ctrl-C, SIGTERM) or ``--duration``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import logging
+import signal
+from typing import Any
+
+from plansys_bridge.clock import Clock, run
+from plansys_bridge.errors import ConfigError
+from plansys_bridge.hub.hub import Hub
+from plansys_bridge.mission import build_knowledge, make_clock, make_transport
+from plansys_bridge.mission_config import MissionConfig, load_mission
+from plansys_bridge.pddl.parser import parse_domain_files
+from plansys_bridge.performers.base import ActionPerformer, PerformerContext
+from plansys_bridge.performers.remote import serve_performers
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser(
+        "performers",
+        help="serve only a mission's performers on its DDS hub (the executor runs elsewhere)",
+    )
+    p.add_argument("mission", help="mission YAML file with transport: {kind: dds, domain_id: N}")
+    p.add_argument("--time-scale", type=float, help="override clock.time_scale")
+    p.add_argument(
+        "--duration", type=float, help="stop after this many seconds (default: until interrupted)"
+    )
+    p.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    p.set_defaults(func=handle)
+
+
+def handle(args: argparse.Namespace) -> int:
+    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING)
+    mission = load_mission(args.mission)
+    if mission.transport.kind != "dds":
+        raise ConfigError(
+            "performers in their own process need transport: {kind: dds}",
+            key="transport.kind",
+            file=mission.source,
+        )
+    if args.time_scale:
+        clock_config = type(mission.clock).model_validate(
+            mission.clock.model_dump() | {"time_scale": args.time_scale}
+        )
+        mission = mission.model_copy(update={"clock": clock_config})
+    if args.duration is not None and not args.duration > 0:
+        raise ConfigError(f"--duration must be > 0, got {args.duration}", key="--duration")
+    clock = make_clock(mission)
+    run(_serve(mission, clock, args.duration), clock)
+    return 0
+
+
+async def _serve(mission: MissionConfig, clock: Clock, duration: float | None) -> None:
+    domain = parse_domain_files(mission.domain_paths)
+    knowledge = build_knowledge(mission, domain)
+    hub = Hub(make_transport(mission), clock)
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    signals = (signal.SIGINT, signal.SIGTERM)
+    for sig in signals:
+        loop.add_signal_handler(sig, stop.set)
+    await hub.start()
+    try:
+        context = PerformerContext(
+            hub=hub, clock=clock, knowledge=knowledge, base_dir=mission.base_dir
+        )
+        entries = [p.model_dump() for p in mission.performers]
+
+        def ready(performers: list[ActionPerformer]) -> None:
+            names = ", ".join(p.node_name for p in performers)
+            print(f"performers ready: {names} ({hub.transport!r})", flush=True)
+
+        async def until() -> None:
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(stop.wait(), duration)
+
+        await serve_performers(context, entries, until(), on_ready=ready)
+    finally:
+        await hub.close()
+        for sig in signals:
+            loop.remove_signal_handler(sig)
+    print("performers stopped", flush=True)
