@@ -239,7 +239,7 @@ class _Experiment:
             s.plans += len(result.plans)
             s.replans += result.replans
             s.actions += len(result.actions)
-            s.reauctioned_actions += sum(1 for a in result.actions if getattr(a, "reauctioned", 0))
+            s.reauctioned_actions += sum(1 for a in result.actions if a.reauctioned)
             if result.success:
                 s.dishes += len(order.dishes)
             else:

@@ -170,6 +170,10 @@ class ActionClient:
         self._loop: asyncio.AbstractEventLoop | None = None
         self._pending_bidders: list[str] = []
         self._confirm_cb: Callable[[str], None] | None = None
+        self._busy_nodes: set[str] = set()
+        """Matching performers last heard RUNNING (busy with another action)."""
+        self._freed = False
+        """A matching performer went from RUNNING to READY: worth asking again now."""
 
     @property
     def full_name(self) -> str:
@@ -289,7 +293,14 @@ class ActionClient:
                 if now >= give_up_at:
                     return None
                 next_request = start + sent * policy.retry_period
-                if now >= next_request:
+                if self._freed and sent and start + sent * policy.retry_period < give_up_at:
+                    # A performer that can serve us just finished its other action: ask
+                    # at once, using up the next periodic REQUEST's slot, so the count
+                    # stays one per retry period and none goes out after giving up.
+                    self._freed = False
+                    self._send(ExecutionType.REQUEST, "")
+                    sent += 1
+                elif now >= next_request:
                     self._send(ExecutionType.REQUEST, "")
                     sent += 1
                     # Catch up without a burst if the loop was held up for a while.
@@ -430,14 +441,32 @@ class ActionClient:
             self._wake()
 
     def _on_status_msg(self, msg: object) -> None:
+        if not isinstance(msg, ActionPerformerStatus):
+            return
         if (
             self.phase is ClientPhase.EXECUTING
-            and isinstance(msg, ActionPerformerStatus)
             and msg.node_name == self.performer
             and msg.state is PerformerState.RUNNING
             and self._loop is not None
         ):
             self._last_seen = self._loop.time()
+        elif self.phase is ClientPhase.AUCTION and self._could_serve(msg):
+            if msg.state is PerformerState.RUNNING:
+                self._busy_nodes.add(msg.node_name)
+            elif msg.state is PerformerState.READY and msg.node_name in self._busy_nodes:
+                self._busy_nodes.discard(msg.node_name)
+                self._freed = True
+                self._wake()
+
+    def _could_serve(self, msg: ActionPerformerStatus) -> bool:
+        """Does this heartbeat come from a performer whose action and specialised
+        arguments (empty string = any) fit this request?"""
+        if msg.action != self.action or len(msg.specialized_arguments) > len(self.arguments):
+            return False
+        return all(
+            want in ("", have)
+            for want, have in zip(msg.specialized_arguments, self.arguments, strict=False)
+        )
 
     def _wake(self) -> None:
         waiter = self._waiter

@@ -397,10 +397,11 @@ def test_a_committed_performer_does_not_bid_elsewhere_and_a_busy_one_neither(
         (1.1, REQ, "", "B"),  # busy with A: no answer
         (2.1, REQ, "", "B"),
         (2.5, FIN, "p", "A"),
-        (3.1, REQ, "", "B"),
-        (3.1, RESP, "p", "B"),
-        (3.1, CONF, "p", "B"),
-        (5.1, FIN, "p", "B"),
+        # p announces READY after A: B asks again at once, not at its next retry (3.1)
+        (2.5, REQ, "", "B"),
+        (2.5, RESP, "p", "B"),
+        (2.5, CONF, "p", "B"),
+        (4.5, FIN, "p", "B"),
     ]
 
 

@@ -6,7 +6,6 @@ import asyncio
 from collections import defaultdict
 from typing import Any
 
-import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -181,14 +180,13 @@ def test_protocol_invariants(
                 # CANCEL was heard, which the performers check themselves below.
         # a node is confirmed at most once per action, and at most 1 + reauctions nodes
         assert len(confirmed) == len(set(confirmed)) <= 1 + policy.reauctions
-        # REQUESTs: one per retry_period, for give_up_after at most, per auction
+        # REQUESTs: one per retry_period slot (a performer becoming free may take its
+        # slot early), for give_up_after at most, per auction
         per_auction = round(policy.give_up_after / policy.retry_period)
         assert len(requests) <= (1 + policy.reauctions) * per_auction
         if outcome.gave_up and not confirmed:
             assert len(requests) == per_auction
-            assert requests[-1] - requests[0] == pytest.approx(
-                (per_auction - 1) * policy.retry_period
-            )
+            assert requests[-1] - requests[0] <= (per_auction - 1) * policy.retry_period + 1e-9
         if outcome.success:
             finishes = [m for _, m in msgs if m.type is T.FINISH]
             assert finishes[-1].success and finishes[-1].node_id == outcome.performer
