@@ -27,15 +27,16 @@ def register(sub: Any) -> None:
 
 
 def handle(args: argparse.Namespace) -> int:
-    mission = default_missions_dir() / DEMOS[args.name]
-    ns = argparse.Namespace(
-        mission=str(mission),
-        plan=None,
-        clock=args.clock,
-        time_scale=args.time_scale,
-        record=None,
-        json=args.json,
-        quiet=False,
-        verbose=False,
-    )
-    return run_cmd.handle(ns)
+    """Run the demo's mission file exactly as ``plansys-bridge run`` would."""
+    argv = ["run", str(default_missions_dir() / DEMOS[args.name])]
+    if args.clock:
+        argv += ["--clock", args.clock]
+    if args.time_scale:
+        argv += ["--time-scale", str(args.time_scale)]
+    if args.json:
+        argv.append("--json")
+    parser = argparse.ArgumentParser(prog="plansys-bridge")
+    run_cmd.register(parser.add_subparsers())
+    run_args = parser.parse_args(argv)
+    code: int = run_args.func(run_args)
+    return code

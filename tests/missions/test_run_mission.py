@@ -125,3 +125,11 @@ def test_unknown_performer_kind_names_the_key(
     assert code == 2
     assert "performers[3].kind" in err
     assert "simulatd" in err
+
+
+def test_demo_command_runs_the_demo_mission(capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["demo", "--clock", "virtual", "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0
+    assert out["mission"] == "demo_cooking"
+    assert out["replans"] == 1
