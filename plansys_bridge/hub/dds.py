@@ -135,10 +135,11 @@ class _Endpoint:
     condition: Any
 
 
-def _qos(depth: int, *, marked: bool) -> Qos:
+def _qos(depth: int | None, *, marked: bool = False) -> Qos:
+    """Reliable, volatile, XCDR1; ``depth`` None keeps all (readers)."""
     policies: list[Any] = [
         Policy.Reliability.Reliable(duration(seconds=1)),
-        Policy.History.KeepLast(depth),
+        Policy.History.KeepAll if depth is None else Policy.History.KeepLast(depth),
         Policy.Durability.Volatile,
         # ROS 2 (rmw_cyclonedds) speaks XCDR1; say so rather than rely on defaults.
         Policy.DataRepresentation(use_cdrv0_representation=True),
@@ -229,7 +230,9 @@ class DdsTransport:
         topic = Topic(p, channel.dds_topic, channel.idl_type)
         marked = not channel.project and route.project is not None
         writer = DataWriter(p, topic, _qos(channel.depth, marked=marked))
-        reader = DataReader(p, topic, _qos(channel.depth, marked=False))
+        # Writers keep PlanSys2's depth; readers keep everything until the reader thread
+        # takes it, so a burst longer than the depth is not cut short on arrival.
+        reader = DataReader(p, topic, _qos(None))
         condition = ReadCondition(reader, _ANY_SAMPLE)
         self._waitset.attach(condition)
         return _Endpoint(route, channel, topic, writer, reader, condition)
@@ -299,8 +302,7 @@ class DdsTransport:
         if topic not in self._warned_local:
             self._warned_local.add(topic)
             log.warning(
-                "topic %r has no DDS type: delivered inside this process only "
-                "(DDS carries %s)",
+                "topic %r has no DDS type: delivered inside this process only (DDS carries %s)",
                 topic,
                 ", ".join(ROUTES),
             )
