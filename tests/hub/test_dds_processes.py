@@ -1,0 +1,157 @@
+"""Performers in a subprocess, executor in the test process: one mission over DDS."""
+
+from __future__ import annotations
+
+import os
+import random
+import selectors
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("cyclonedds", reason="cyclonedds (extra 'dds') is not installed")
+
+from plansys_bridge.cli import main
+from plansys_bridge.errors import ConfigError, HubError
+from plansys_bridge.hub.messages import ActionStatus
+from plansys_bridge.mission import run_mission
+from plansys_bridge.mission_config import load_mission
+
+pytestmark = pytest.mark.timeout(90)
+
+PDDL = Path(__file__).resolve().parents[2] / "configs" / "pddl" / "flat_navigation.pddl"
+
+MISSION = """\
+name: dds_flat
+domain: {domain}
+knowledge:
+  instances: {{r1: robot, r2: robot, hall: room, kitchen: room, bedroom: room}}
+  predicates:
+    - (robot_at r1 hall)
+    - (robot_at r2 hall)
+    - (connected hall kitchen)
+    - (connected hall bedroom)
+    - (connected kitchen bedroom)
+  functions:
+    - (= (travel_time hall kitchen) 1)
+    - (= (travel_time hall bedroom) 1)
+    - (= (travel_time kitchen bedroom) 1)
+goal: (and (visited r1 kitchen) (visited r2 bedroom) (visited r1 bedroom))
+performers:
+  - {{kind: simulated, name: r1_base, actions: {{move: [r1]}}, default_duration: 1.0,
+     feedback_period: 0.5}}
+  - {{kind: simulated, name: r2_base, actions: {{move: [r2]}}, default_duration: 1.0,
+     feedback_period: 0.5}}
+transport: {{kind: dds, domain_id: {domain_id}, peer_timeout: {peer_timeout}}}
+clock: {{kind: wall, time_scale: 0.2}}
+timeout: 60
+"""
+
+
+def write_mission(tmp_path: Path, *, peer_timeout: float = 15.0) -> Path:
+    path = tmp_path / "mission.yaml"
+    domain_id = random.SystemRandom().randint(1, 232)
+    path.write_text(
+        MISSION.format(domain=PDDL, domain_id=domain_id, peer_timeout=peer_timeout),
+        encoding="utf-8",
+    )
+    return path
+
+
+def read_line(proc: subprocess.Popen[str], timeout: float) -> str:
+    """The next stdout line of ``proc``; fails the test instead of hanging."""
+    assert proc.stdout is not None
+    with selectors.DefaultSelector() as sel:
+        sel.register(proc.stdout, selectors.EVENT_READ)
+        if not sel.select(timeout):
+            pytest.fail(f"no output from the performers process within {timeout} s")
+    return proc.stdout.readline()
+
+
+@pytest.fixture
+def performers_process(tmp_path: Path) -> Iterator[tuple[Path, subprocess.Popen[str]]]:
+    """``plansys-bridge performers MISSION`` running in a subprocess, stopped afterwards."""
+    mission = write_mission(tmp_path)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "plansys_bridge", "performers", str(mission), "--duration", "80"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=os.environ | {"PYTHONUNBUFFERED": "1"},
+    )
+    try:
+        yield mission, proc
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        proc.wait(timeout=10)
+
+
+def test_executor_here_performers_in_a_subprocess(
+    performers_process: tuple[Path, subprocess.Popen[str]],
+) -> None:
+    mission_path, proc = performers_process
+    ready = read_line(proc, timeout=30)
+    assert ready.startswith("performers ready: r1_base, r2_base"), ready
+
+    lines: list[str] = []
+    report = run_mission(load_mission(mission_path), out=lines.append, local_performers=False)
+
+    assert report.success, "\n".join(lines)
+    assert report.result is not None
+    records = report.result.actions
+    assert len(records) == 3
+    assert all(a.status == ActionStatus.SUCCEEDED for a in records)
+    # Every action was done by the performer in the other process that serves its robot.
+    assert {(a.text.split()[1], a.performer) for a in records} == {
+        ("r1", "r1_base"),
+        ("r2", "r2_base"),
+    }
+    assert any("2 remote performers" in line for line in lines)
+
+    proc.send_signal(signal.SIGTERM)
+    out, err = proc.communicate(timeout=15)
+    assert proc.returncode == 0, err
+    assert "performers stopped" in out
+
+
+def test_the_executor_names_performers_that_never_show_up(tmp_path: Path) -> None:
+    mission = load_mission(write_mission(tmp_path, peer_timeout=0.5))
+    started = time.monotonic()
+    with pytest.raises(HubError, match="no heartbeat from performer.s. r1_base, r2_base"):
+        run_mission(mission, out=None, local_performers=False)
+    assert time.monotonic() - started < 30
+
+
+def test_split_runs_need_the_dds_transport(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "inprocess.yaml"
+    text = write_mission(tmp_path).read_text(encoding="utf-8")
+    path.write_text(
+        text.replace(
+            text[text.index("transport:") :].split("\n")[0], "transport: {kind: inprocess}"
+        ),
+        encoding="utf-8",
+    )
+    with pytest.raises(ConfigError, match="transport"):
+        run_mission(load_mission(path), out=None, local_performers=False)
+    assert main(["performers", str(path)]) == 2
+    assert "need transport: {kind: dds}" in capsys.readouterr().err
+
+
+def test_dds_with_the_virtual_clock_is_refused_on_load(tmp_path: Path) -> None:
+    path = write_mission(tmp_path)
+    path.write_text(
+        path.read_text(encoding="utf-8").replace(
+            "clock: {kind: wall, time_scale: 0.2}", "clock: {kind: virtual}"
+        ),
+        encoding="utf-8",
+    )
+    with pytest.raises(ConfigError, match="dds transport needs the wall clock"):
+        load_mission(path)
