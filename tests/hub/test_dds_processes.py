@@ -8,7 +8,6 @@ import selectors
 import signal
 import subprocess
 import sys
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -122,10 +121,8 @@ def test_executor_here_performers_in_a_subprocess(
 
 def test_the_executor_names_performers_that_never_show_up(tmp_path: Path) -> None:
     mission = load_mission(write_mission(tmp_path, peer_timeout=0.5))
-    started = time.monotonic()
-    with pytest.raises(HubError, match="no heartbeat from performer.s. r1_base, r2_base"):
+    with pytest.raises(HubError, match=r"no heartbeat from performer\(s\) r1_base, r2_base"):
         run_mission(mission, out=None, local_performers=False)
-    assert time.monotonic() - started < 30
 
 
 def test_split_runs_need_the_dds_transport(
