@@ -4,11 +4,14 @@ Why it is built this way:
 
 * Every change is validated against the domain (known predicate/function, arity,
   known objects, types including subtypes) before anything is touched, and every
-  change runs inside one guarded block that restores a snapshot if anything fails,
+  change runs inside one guarded block that undoes it if anything fails,
   so bad input never leaves the knowledge half-changed.
-* What changed is computed as a diff between the snapshot and the result, so a
-  subscriber gets exactly one :class:`KnowledgeChange` per change (or per
-  transaction) saying precisely what moved, however the change was made.
+* Instances, facts and fluent values live in journaled tables that log what each
+  change touches: a failed change is undone from that log, and what changed is
+  computed from it (net of what came back), so a subscriber gets exactly one
+  :class:`KnowledgeChange` per change (or per transaction) saying precisely what
+  moved, however the change was made, at a cost in the size of the change rather
+  than of the knowledge.
 * Facts live in a :class:`State` updated copy-on-write, so ``state()`` is free and
   the executor can keep old snapshots; insertion order is kept for listings.
 * One re-entrant lock: adapters and the executor call in from other threads.
@@ -28,6 +31,7 @@ from plansys_bridge.hub.messages import Knowledge
 from plansys_bridge.knowledge.domain_expert import DomainExpert
 from plansys_bridge.knowledge.evaluation import Evaluator
 from plansys_bridge.knowledge.formulas import fluent_text
+from plansys_bridge.knowledge.journal import JournaledTable
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import (
     TRUE,
@@ -76,11 +80,13 @@ class KnowledgeChange:
     """The snapshot right after the change (read it without taking the lock)."""
 
 
-@dataclass
-class _Snapshot:
-    instances: dict[str, str]
-    facts: dict[Atom, None]
-    fluents: dict[FluentKey, float]
+@dataclass(frozen=True)
+class _Mark:
+    """Where a change started: log positions of the tables, the goal and the state."""
+
+    instances: int
+    facts: int
+    fluents: int
     goal: Condition | None
     state: State
 
@@ -95,9 +101,9 @@ class ProblemExpert:
         self._types = self.domain_expert.types
         self._constants = self.domain_expert.constants
         self._lock = threading.RLock()
-        self._instances: dict[str, str] = {}
-        self._facts: dict[Atom, None] = {}
-        self._fluents: dict[FluentKey, float] = {}
+        self._instances: JournaledTable[str, str] = JournaledTable()
+        self._facts: JournaledTable[Atom, None] = JournaledTable()
+        self._fluents: JournaledTable[FluentKey, float] = JournaledTable()
         self._goal: Condition | None = None
         self._state = State(objects=self._constants)
         self._subscribers: list[Callable[[KnowledgeChange], None]] = []
@@ -106,24 +112,28 @@ class ProblemExpert:
 
     # ================================================================ change machinery
 
-    def _snapshot(self) -> _Snapshot:
-        return _Snapshot(
-            dict(self._instances), dict(self._facts), dict(self._fluents), self._goal, self._state
+    def _mark(self) -> _Mark:
+        return _Mark(
+            self._instances.mark(),
+            self._facts.mark(),
+            self._fluents.mark(),
+            self._goal,
+            self._state,
         )
 
-    def _restore(self, snap: _Snapshot) -> None:
-        self._instances = snap.instances
-        self._facts = snap.facts
-        self._fluents = snap.fluents
-        self._goal = snap.goal
-        self._state = snap.state
+    def _undo(self, mark: _Mark) -> None:
+        self._instances.undo(mark.instances)
+        self._facts.undo(mark.facts)
+        self._fluents.undo(mark.fluents)
+        self._goal = mark.goal
+        self._state = mark.state
 
     @contextmanager
     def _change(self, reason: str, *, steps: bool = False) -> Iterator[None]:
         """Run a change all-or-nothing; notify once when the outermost block ends.
 
         Single operations validate everything before they touch anything, so inside
-        a transaction they need no snapshot of their own; ``steps=True`` marks one
+        a transaction they need no undo point of their own; ``steps=True`` marks one
         that mutates as it goes (a whole problem), which is then undone on its own
         when it fails, even if the surrounding transaction carries on.
         """
@@ -132,23 +142,29 @@ class ProblemExpert:
                 if not steps:
                     yield
                     return
-                inner = self._snapshot()
+                inner = self._mark()
                 try:
                     yield
                 except BaseException:
-                    self._restore(inner)
+                    self._undo(inner)
                     raise
                 return
-            snap = self._snapshot()
+            start = self._mark()
             self._depth = 1
             try:
                 yield
             except BaseException:
-                self._restore(snap)
+                self._undo(start)
                 raise
             finally:
                 self._depth = 0
-            self._notify(snap, reason)
+            try:
+                change = self._change_since(start, reason)
+            finally:
+                for table in (self._instances, self._facts, self._fluents):
+                    table.forget_log()
+            if change is not None:
+                self._notify(change)
 
     @contextmanager
     def transaction(self) -> Iterator[ProblemExpert]:
@@ -156,33 +172,13 @@ class ProblemExpert:
         with self._change("transaction", steps=True):
             yield self
 
-    def _notify(self, snap: _Snapshot, reason: str) -> None:
-        old, new = snap.state, self._state
-        added: set[Atom] = set()
-        removed: set[Atom] = set()
-        if old is not new:
-            for pred in set(old.predicates()) | set(new.predicates()):
-                before, after = old.tuples(pred), new.tuples(pred)
-                if before is after:
-                    continue
-                added.update(Atom(pred, a) for a in after - before)
-                removed.update(Atom(pred, a) for a in before - after)
-        # Untouched tables are shared between the snapshots: skip comparing them.
-        changed_fluents: dict[FluentKey, float] = {}
-        removed_fluents: frozenset[FluentKey] = frozenset()
-        if not old.same_fluents(new):
-            changed_fluents = {k: v for k, v in self._fluents.items() if snap.fluents.get(k) != v}
-            removed_fluents = frozenset(k for k in snap.fluents if k not in self._fluents)
-        added_instances: dict[str, str] = {}
-        removed_instances: dict[str, str] = {}
-        if not old.same_objects(new):
-            added_instances = {
-                k: v for k, v in self._instances.items() if snap.instances.get(k) != v
-            }
-            removed_instances = {
-                k: v for k, v in snap.instances.items() if self._instances.get(k) != v
-            }
-        goal_changed = snap.goal != self._goal
+    def _change_since(self, start: _Mark, reason: str) -> KnowledgeChange | None:
+        """What the tables' logs say moved since ``start``; None when nothing did."""
+        added, removed = self._facts.changes_since(start.facts)
+        changed_fluents, fluents_before = self._fluents.changes_since(start.fluents)
+        removed_fluents = frozenset(k for k in fluents_before if k not in self._fluents)
+        added_instances, removed_instances = self._instances.changes_since(start.instances)
+        goal_changed = start.goal != self._goal
         if not (
             added
             or removed
@@ -192,9 +188,9 @@ class ProblemExpert:
             or removed_instances
             or goal_changed
         ):
-            return
+            return None
         self.version += 1
-        change = KnowledgeChange(
+        return KnowledgeChange(
             version=self.version,
             reason=reason,
             added_instances=added_instances,
@@ -207,6 +203,8 @@ class ProblemExpert:
             goal=self._goal,
             state=self._state,
         )
+
+    def _notify(self, change: KnowledgeChange) -> None:
         for callback in list(self._subscribers):
             try:
                 callback(change)
@@ -401,7 +399,7 @@ class ProblemExpert:
             return False
         if current is not None:
             raise KnowledgeError(f"instance {obj}: already exists with type {current}")
-        self._instances[obj] = typ
+        self._instances.set(obj, typ)
         return True
 
     def remove_instance(self, name: str) -> bool:
@@ -412,13 +410,13 @@ class ProblemExpert:
                 raise KnowledgeError(f"instance {obj}: is a constant of the domain")
             if obj not in self._instances:
                 return False
-            del self._instances[obj]
+            self._instances.delete(obj)
             gone = [a for a in self._facts if obj in a.args]
             for atom in gone:
-                del self._facts[atom]
+                self._facts.delete(atom)
             keys = [k for k in self._fluents if obj in k[1]]
             for key in keys:
-                del self._fluents[key]
+                self._fluents.delete(key)
             objects = dict(self._state.objects)
             del objects[obj]
             self._state = self._state.with_changes(
@@ -449,7 +447,7 @@ class ProblemExpert:
             atom = self._check_fact(self._atom(fact))
             if atom in self._facts:
                 return False
-            self._facts[atom] = None
+            self._facts.set(atom, None)
             self._state = self._state.with_changes(adds=(atom,))
             return True
 
@@ -459,7 +457,7 @@ class ProblemExpert:
             atom = self._check_fact(self._atom(fact))
             if atom not in self._facts:
                 return False
-            del self._facts[atom]
+            self._facts.delete(atom)
             self._state = self._state.with_changes(deletes=(atom,))
             return True
 
@@ -491,7 +489,7 @@ class ProblemExpert:
             key = self._check_fluent(value.fluent.name, value.fluent.args)
             if self._fluents.get(key) == value.value:
                 return False
-            self._fluents[key] = float(value.value)
+            self._fluents.set(key, float(value.value))
             self._state = self._state.with_changes(fluents={key: value.value})
             return True
 
@@ -516,7 +514,7 @@ class ProblemExpert:
             key = self._check_fluent(*key)
             if key not in self._fluents:
                 return False
-            del self._fluents[key]
+            self._fluents.delete(key)
             self._state = self._state.with_changes(removed_fluents=(key,))
             return True
 
@@ -601,8 +599,9 @@ class ProblemExpert:
                 for fv in problem.init_fluents:
                     values[self._check_fluent(fv.fluent.name, fv.fluent.args)] = float(fv.value)
                 for atom in facts:
-                    self._facts[atom] = None
-                self._fluents.update(values)
+                    self._facts.set(atom, None)
+                for key, number in values.items():
+                    self._fluents.set(key, number)
                 self._state = self._state.with_changes(
                     adds=facts, fluents=values, objects={**self._constants, **self._instances}
                 )
@@ -612,9 +611,9 @@ class ProblemExpert:
                 raise KnowledgeError(f"{where}: {exc}") from exc
 
     def _clear(self) -> None:
-        self._instances = {}
-        self._facts = {}
-        self._fluents = {}
+        self._instances.clear()
+        self._facts.clear()
+        self._fluents.clear()
         self._goal = None
         self._state = State(objects=self._constants)
 
@@ -668,10 +667,11 @@ class ProblemExpert:
             for key in updates:
                 self._check_fluent(*key)
             for atom in checked_deletes:
-                self._facts.pop(atom, None)
+                self._facts.discard(atom)
             for atom in checked_adds:
-                self._facts[atom] = None
-            self._fluents.update(updates)
+                self._facts.set(atom, None)
+            for key, number in updates.items():
+                self._fluents.set(key, number)
             self._state = self._state.with_changes(
                 adds=checked_adds, deletes=checked_deletes, fluents=updates
             )

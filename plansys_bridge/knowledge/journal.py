@@ -1,0 +1,122 @@
+"""A table in insertion order that logs its changes, to undo them or report them.
+
+Why: the problem expert must make every change all-or-nothing and tell subscribers
+exactly what moved. Copying its tables before each change and comparing them after
+costs time in the number of instances and facts; logging the few entries a change
+touches costs time in the size of the change. Undo must also give back the original
+insertion order (listings keep it), so each key keeps the sequence number it was
+inserted with and a rollback that puts keys back sorts the table by it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from typing import Generic, TypeVar
+
+K = TypeVar("K")
+V = TypeVar("V")
+
+
+class _Missing:
+    """Marks a key that was not in the table."""
+
+    def __repr__(self) -> str:
+        return "MISSING"
+
+
+MISSING = _Missing()
+
+
+class JournaledTable(Mapping[K, V], Generic[K, V]):
+    """A read-only mapping to its users; ``set``/``delete`` write and log."""
+
+    __slots__ = ("_data", "_log", "_next", "_seq")
+
+    def __init__(self) -> None:
+        self._data: dict[K, V] = {}
+        self._seq: dict[K, int] = {}
+        self._next = 0
+        self._log: list[tuple[K, V | _Missing, int]] = []
+
+    # ------------------------------------------------------------------ reading
+
+    def __getitem__(self, key: K) -> V:
+        return self._data[key]
+
+    def __contains__(self, key: object) -> bool:
+        return key in self._data
+
+    def __iter__(self) -> Iterator[K]:
+        return iter(self._data)
+
+    def __len__(self) -> int:
+        return len(self._data)
+
+    def get(self, key: K, default: V | None = None) -> V | None:  # type: ignore[override]
+        return self._data.get(key, default)
+
+    # ------------------------------------------------------------------ writing
+
+    def set(self, key: K, value: V) -> None:
+        old = self._data.get(key, MISSING)
+        self._log.append((key, old, self._seq.get(key, -1)))
+        if old is MISSING:
+            self._seq[key] = self._next
+            self._next += 1
+        self._data[key] = value
+
+    def delete(self, key: K) -> None:
+        """Remove ``key`` (KeyError when absent)."""
+        self._log.append((key, self._data.pop(key), self._seq.pop(key)))
+
+    def discard(self, key: K) -> None:
+        if key in self._data:
+            self.delete(key)
+
+    def clear(self) -> None:
+        for key in list(self._data):
+            self.delete(key)
+
+    # ------------------------------------------------------------------ the log
+
+    def mark(self) -> int:
+        """A point to undo back to, or to report changes since."""
+        return len(self._log)
+
+    def undo(self, mark: int) -> None:
+        """Put the table back as it was at ``mark``, insertion order included."""
+        put_back = False
+        while len(self._log) > mark:
+            key, old, seq = self._log.pop()
+            if isinstance(old, _Missing):
+                del self._data[key]
+                del self._seq[key]
+                continue
+            if key not in self._data:
+                self._seq[key] = seq
+                put_back = True
+            self._data[key] = old
+        if put_back:
+            self._data = {k: self._data[k] for k in sorted(self._data, key=self._seq.__getitem__)}
+
+    def changes_since(self, mark: int) -> tuple[dict[K, V], dict[K, V]]:
+        """``(now, before)``: the entries that differ, as they are now (keys still
+        there) and as they were at ``mark`` (keys that were there)."""
+        first: dict[K, V | _Missing] = {}
+        for key, old, _ in self._log[mark:]:
+            first.setdefault(key, old)
+        now: dict[K, V] = {}
+        before: dict[K, V] = {}
+        for key, old in first.items():
+            new = self._data.get(key, MISSING)
+            if new == old:
+                continue
+            if not isinstance(new, _Missing):
+                now[key] = new
+            if not isinstance(old, _Missing):
+                before[key] = old
+        return now, before
+
+    def forget_log(self) -> None:
+        """Keep the table as it is; nothing before now can be undone."""
+        self._log.clear()
