@@ -17,18 +17,14 @@ from pathlib import Path
 from plansys_bridge.pddl.model import Domain
 from plansys_bridge.pddl.parser import parse_domain
 
+FIXTURES = Path(
+    os.environ.get("PLANSYS_BRIDGE_FIXTURES")
+    or Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "plansys2"
+)
+"""Where the corpus should be (tests that need particular files read them from here)."""
 
-def _find_corpus() -> Path | None:
-    env = os.environ.get("PLANSYS_BRIDGE_FIXTURES")
-    candidates = [Path(env)] if env else []
-    here = Path(__file__).resolve()
-    candidates += [
-        here.parents[2] / "shared" / "fixtures" / "plansys2",
-    ]
-    return next((c for c in candidates if c.is_dir()), None)
-
-
-CORPUS = _find_corpus()
+CORPUS = FIXTURES if FIXTURES.is_dir() else None
+"""The corpus, or None when it is missing (the corpus-wide tests then have no cases)."""
 
 _KIND = re.compile(r"\(\s*define\s*\(\s*(domain|problem)\b", re.IGNORECASE)
 

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import argparse
 import io
-import os
 from pathlib import Path
 
 import pytest
+from pddl_corpus import FIXTURES
 
 from plansys_bridge.cli import terminal_cmd
 from plansys_bridge.knowledge.domain_expert import DomainExpert
@@ -15,10 +15,6 @@ from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.planning.plan import Plan, PlanStep
 from plansys_bridge.terminal import HELP, Terminal
 
-FIXTURES = Path(
-    os.environ.get("PLANSYS_BRIDGE_FIXTURES")
-    or Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "plansys2"
-)
 EXAMPLES = FIXTURES / "ros2_planning_system_examples"
 SIMPLE_DOMAIN = EXAMPLES / "plansys2_simple_example/pddl/simple_example.pddl"
 BT_DOMAIN = EXAMPLES / "plansys2_bt_example/pddl/bt_example.pddl"

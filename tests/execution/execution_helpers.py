@@ -9,8 +9,9 @@ from __future__ import annotations
 import asyncio
 from collections.abc import Awaitable, Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
+
+from pddl_corpus import FIXTURES
 
 from plansys_bridge.clock import VirtualClock, run
 from plansys_bridge.execution.executor import Executor
@@ -25,9 +26,7 @@ from plansys_bridge.performers.base import PerformerContext
 from plansys_bridge.performers.simulated import SimulatedPerformer
 from plansys_bridge.planning.planner import Planner
 
-EXECUTOR_PDDL = Path(
-    "/work/shared/fixtures/plansys2/ros2_planning_system/plansys2_executor/test/pddl"
-)
+EXECUTOR_PDDL = FIXTURES / "ros2_planning_system/plansys2_executor/test/pddl"
 
 
 def load_domain(name: str) -> Domain:

@@ -2,14 +2,10 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
-# The corpus lives in shared/ beside the repository (or where $PLANSYS_BRIDGE_FIXTURES says).
-PLANSYS2 = Path(
-    os.environ.get("PLANSYS_BRIDGE_FIXTURES")
-    or Path(__file__).resolve().parents[3] / "shared" / "fixtures" / "plansys2"
-)
+from pddl_corpus import FIXTURES as PLANSYS2
+
 PROBLEM_EXPERT_PDDL = PLANSYS2 / "ros2_planning_system/plansys2_problem_expert/test/pddl"
 DOMAIN_EXPERT_PDDL = PLANSYS2 / "ros2_planning_system/plansys2_domain_expert/test/pddl"
 
