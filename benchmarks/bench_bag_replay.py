@@ -27,6 +27,7 @@ import tracemalloc
 from pathlib import Path
 from typing import Any
 
+from bench_support import BAGS
 from plansys_bridge_adapters.rosbag.performer import BagNavigationPerformer
 from plansys_bridge_adapters.rosbag.reader import BagReader, ros2_typestore
 from plansys_bridge_adapters.rosbag.route import Route
@@ -126,7 +127,7 @@ def _size(path: Path) -> int:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
-    parser.add_argument("--bags", type=Path, default=REPO / ".." / "shared" / "bags")
+    parser.add_argument("--bags", type=Path, default=BAGS)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     args = parser.parse_args()
     sources = [(args.bags / name, topic) for name, topic in SOURCES if (args.bags / name).exists()]

@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 import can
+from bench_support import percentile
 from plansys_bridge_adapters.can.bus import BusConfig, CanBusClient
 from plansys_bridge_adapters.can.dbc import (
     BaseState,
@@ -111,11 +112,8 @@ def bench_latency(reader: str, samples: int = 300) -> dict[str, float]:
             sender.shutdown()
         return delays
 
-    delays = sorted(run(main(), WallClock()))
-    return {
-        "median_ms": statistics.median(delays),
-        "p99_ms": delays[int(len(delays) * 0.99) - 1],
-    }
+    delays = run(main(), WallClock())
+    return {"median_ms": statistics.median(delays), "p99_ms": percentile(delays, 0.99)}
 
 
 def _performer(hub: Hub, channel: str, **extra: Any) -> CanBasePerformer:

@@ -15,50 +15,17 @@ Run: ``python benchmarks/bench_dispatch.py [--actions N] [--idle-performers K] [
 from __future__ import annotations
 
 import argparse
-import asyncio
 import json
-import statistics
 import time
 from typing import Any
+
+from bench_support import StampingPerformer, summary
 
 from plansys_bridge.clock import WallClock, run
 from plansys_bridge.hub.auction import ActionClient, AuctionPolicy
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.transport import InProcessTransport
-from plansys_bridge.performers.base import ActionGoal, ActionPerformer, PerformerContext
-
-
-class StampingPerformer(ActionPerformer):
-    """Does no work; stamps when execution starts and when FINISH is sent."""
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        self.started_at = 0.0
-        self.finished_at = 0.0
-
-    async def execute(self, goal: ActionGoal) -> str | None:
-        self.started_at = time.perf_counter()
-        await asyncio.sleep(0)  # let the client settle into waiting, as a real action would
-        return None
-
-    def _finish(self, goal: ActionGoal, success: bool, status: str) -> None:
-        self.finished_at = time.perf_counter()
-        super()._finish(goal, success, status)
-
-
-def _summary(samples_s: list[float]) -> dict[str, float]:
-    us = sorted(s * 1e6 for s in samples_s)
-
-    def pct(p: float) -> float:
-        return us[min(len(us) - 1, int(p / 100 * len(us)))]
-
-    return {
-        "n": len(us),
-        "median_us": statistics.median(us),
-        "p90_us": pct(90),
-        "p99_us": pct(99),
-        "max_us": us[-1],
-    }
+from plansys_bridge.performers.base import PerformerContext
 
 
 async def _bench(actions: int, idle: int, selection: str) -> dict[str, dict[str, float]]:
@@ -76,25 +43,27 @@ async def _bench(actions: int, idle: int, selection: str) -> dict[str, dict[str,
     dispatch: list[float] = []
     previous_finish: float | None = None
     for i in range(actions + 50):
-        client = ActionClient(hub, "move", ("r1", "a", "b"), request_id=str(i), policy=policy)
+        rid = str(i)
+        client = ActionClient(hub, "move", ("r1", "a", "b"), request_id=rid, policy=policy)
         sent = time.perf_counter()
         outcome = await client.run()
         returned = time.perf_counter()
         if not outcome.success:
             raise RuntimeError(f"action {i} failed: {outcome.status}")
+        started, finished = worker.started[rid], worker.finished[rid]
         if i >= 50:  # warm-up excluded
-            request_to_exec.append(worker.started_at - sent)
-            finish_to_client.append(returned - worker.finished_at)
+            request_to_exec.append(started - sent)
+            finish_to_client.append(returned - finished)
             if previous_finish is not None:
-                dispatch.append(worker.started_at - previous_finish)
-        previous_finish = worker.finished_at
+                dispatch.append(started - previous_finish)
+        previous_finish = finished
     for p in (worker, *others):
         await p.stop()
     await hub.close()
     return {
-        "request_to_executing": _summary(request_to_exec),
-        "finish_to_client": _summary(finish_to_client),
-        "finish_to_successor_executing": _summary(dispatch),
+        "request_to_executing": summary(request_to_exec),
+        "finish_to_client": summary(finish_to_client),
+        "finish_to_successor_executing": summary(dispatch),
     }
 
 

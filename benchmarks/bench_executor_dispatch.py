@@ -18,11 +18,10 @@ Run: ``/work/venv/bin/python benchmarks/bench_executor_dispatch.py [--actions N]
 from __future__ import annotations
 
 import argparse
-import asyncio
 import json
-import statistics
 import time
-from typing import Any
+
+from bench_support import StampingPerformer, summary
 
 from plansys_bridge.clock import WallClock, run
 from plansys_bridge.execution.executor import Executor
@@ -33,7 +32,7 @@ from plansys_bridge.hub.transport import InProcessTransport
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.pddl.model import Atom
 from plansys_bridge.pddl.parser import parse_domain
-from plansys_bridge.performers.base import ActionGoal, ActionPerformer, PerformerContext
+from plansys_bridge.performers.base import PerformerContext
 from plansys_bridge.planning.plan import Plan, PlanStep
 
 DOMAIN = """
@@ -54,41 +53,6 @@ SPOTS = 10
 """The robot goes round a ring of spots (a small knowledge base, as on a robot)."""
 
 
-class StampingPerformer(ActionPerformer):
-    """Works for ``work_s`` real seconds; stamps execute() start and FINISH."""
-
-    work_s = 0.001
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        self.started: dict[str, float] = {}
-        self.finished: dict[str, float] = {}
-
-    async def execute(self, goal: ActionGoal) -> str | None:
-        self.started[goal.request_id] = time.perf_counter()
-        await asyncio.sleep(self.work_s)
-        return None
-
-    def _finish(self, goal: ActionGoal, success: bool, status: str) -> None:
-        self.finished[goal.request_id] = time.perf_counter()
-        super()._finish(goal, success, status)
-
-
-def _summary(samples_s: list[float]) -> dict[str, float]:
-    us = sorted(s * 1e6 for s in samples_s)
-
-    def pct(p: float) -> float:
-        return us[min(len(us) - 1, int(p / 100 * len(us)))]
-
-    return {
-        "n": len(us),
-        "median_us": statistics.median(us),
-        "p90_us": pct(90),
-        "p99_us": pct(99),
-        "max_us": us[-1],
-    }
-
-
 async def _bench(actions: int) -> dict[str, dict[str, float]]:
     domain = parse_domain(DOMAIN, "<chain>")
     knowledge = ProblemExpert(domain)
@@ -106,6 +70,7 @@ async def _bench(actions: int) -> dict[str, dict[str, float]]:
     hub = Hub(InProcessTransport(), WallClock())
     await hub.start()
     performer = StampingPerformer(PerformerContext(hub, hub.clock), "worker", {"step": ["r1"]})
+    performer.work_s = 0.001
     await performer.start()
     executing: list[float] = []  # the chain starts its actions one after the other
 
@@ -132,8 +97,8 @@ async def _bench(actions: int) -> dict[str, dict[str, float]]:
         to_executing.append(executing[i] - finish)
         to_performer.append(performer.started[f"chain/0/{i}"] - finish)
     return {
-        "finish_to_successor_executing": _summary(to_executing),
-        "finish_to_successor_performer": _summary(to_performer),
+        "finish_to_successor_executing": summary(to_executing),
+        "finish_to_successor_performer": summary(to_performer),
     }
 
 

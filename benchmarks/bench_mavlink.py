@@ -25,6 +25,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from bench_support import percentile
 from plansys_bridge_adapters.mavlink.double import VehicleDouble
 from plansys_bridge_adapters.mavlink.performer import MavlinkPerformer
 from plansys_bridge_adapters.mavlink.vehicle import LinkSettings, MavlinkVehicle
@@ -38,11 +39,6 @@ from plansys_bridge.performers.base import PerformerContext
 
 REPO_CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 POLICY = AuctionPolicy(retry_period=0.2, liveness_timeout=3.0)
-
-
-def percentile(values: list[float], q: float) -> float:
-    ordered = sorted(values)
-    return ordered[min(len(ordered) - 1, int(q * len(ordered)))]
 
 
 async def _command_latency(url: str, n: int) -> list[float]:

@@ -28,12 +28,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from bench_support import FIXTURES
+
 from plansys_bridge.errors import PddlError
 from plansys_bridge.pddl.model import Domain
 from plansys_bridge.pddl.parser import parse_domain, parse_problem
 
-HERE = Path(__file__).resolve()
-DEFAULT_CORPUS = HERE.parents[2] / "shared" / "fixtures" / "plansys2"
 BROKEN = re.compile(r"error|problem_unexpected_syntax|problem_simple_3|domain_simple_derived")
 
 # ---------------------------------------------------------------- generated task
@@ -273,7 +273,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeat", type=int, default=5, help="runs per measurement (best kept)")
     parser.add_argument("--objects", type=int, default=5000, help="objects in the large problem")
-    parser.add_argument("--corpus", type=Path, default=DEFAULT_CORPUS)
+    parser.add_argument("--corpus", type=Path, default=FIXTURES)
     parser.add_argument("--skip-corpus", action="store_true")
     args = parser.parse_args(argv)
     sys.setrecursionlimit(10000)

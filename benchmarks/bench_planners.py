@@ -30,8 +30,9 @@ import random
 import sys
 import time
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
+
+from bench_support import FIXTURES
 
 from plansys_bridge.experiments.cooking_world import cooking_domain_path, dish_order, world_setup
 from plansys_bridge.pddl.model import Domain, Problem
@@ -43,7 +44,6 @@ from plansys_bridge.planning.schedule import reschedule_report
 from plansys_bridge.planning.solvers import load_solver, solver_names
 from plansys_bridge.planning.validation import validate_plan
 
-FIXTURES = Path("/work/shared/fixtures/plansys2")
 FACTORY = FIXTURES / "ros2_planning_system/plansys2_executor/test/pddl"
 
 LARGE_DOMAIN = """
