@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from plansys_bridge.errors import PddlError, PddlSemanticError, PddlSyntaxError
+from plansys_bridge.pddl.model import Action, Atom
 from plansys_bridge.pddl.parser import parse_domain, parse_problem
 
 DOMAIN = """\
@@ -86,7 +87,10 @@ def test_semantic_errors_point_at_the_offender(body: str, at: str, words: str) -
 
 
 def test_unknown_names_in_a_domain_are_left_to_the_problem() -> None:
-    parse_domain(_action("(robot_at ?r nowhere)"))
+    domain = parse_domain(_action("(robot_at ?r nowhere)"))
+    [probe] = [a for a in domain.actions if a.name == "probe"]
+    assert isinstance(probe, Action)
+    assert probe.precondition == Atom("robot_at", ("?r", "nowhere"))
 
 
 def test_subtypes_and_either_are_respected() -> None:
