@@ -43,7 +43,7 @@ from .bus import BusSendError, CanBusClient
 from .controller import Path, PathFollower, Pose2D
 from .dbc import BaseStatus, EStopCommand, MobileBaseDbc, OdomPose, VelocityCommand
 from .double import BaseDouble
-from .monitor import BaseMonitor, Mark
+from .monitor import BaseMonitor, Mark, Problem
 from .settings import CanBaseSettings, Location, parse_settings
 
 __all__ = ["CanBasePerformer"]
@@ -276,15 +276,20 @@ class CanBasePerformer(ActionPerformer):
             raise _BaseFailure("no odometry from the base", transient=True)
         return Pose2D(pose.x, pose.y, pose.yaw)
 
-    def _check(self, mark: Mark) -> None:
+    def _problem(self, mark: Mark, *, ignore_watchdog: bool = False) -> Problem | None:
+        """The monitor's verdict since ``mark`` under this base's safety settings."""
         safety = self.settings.safety
-        problem = self.monitor.problem(
+        return self.monitor.problem(
             self.clock.now(),
             mark,
             heartbeat_timeout=safety.heartbeat_timeout,
             odometry_timeout=safety.odometry_timeout,
             error_frame_limit=safety.error_frame_limit,
+            ignore_watchdog=ignore_watchdog,
         )
+
+    def _check(self, mark: Mark) -> None:
+        problem = self._problem(mark)
         if problem is not None:
             raise _BaseFailure(problem.message, problem.transient)
 
@@ -403,15 +408,7 @@ class CanBasePerformer(ActionPerformer):
         mark = self.monitor.mark()
         while True:
             await asyncio.sleep(self.heartbeat_period)
-            safety = self.settings.safety
-            problem = self.monitor.problem(
-                self.clock.now(),
-                mark,
-                heartbeat_timeout=safety.heartbeat_timeout,
-                odometry_timeout=safety.odometry_timeout,
-                error_frame_limit=safety.error_frame_limit,
-                ignore_watchdog=True,
-            )
+            problem = self._problem(mark, ignore_watchdog=True)
             mark = self.monitor.mark()
             if self.busy or not self.running:
                 continue
