@@ -24,6 +24,8 @@ from plansys_bridge_adapters.can.dbc import (
     default_dbc_path,
 )
 
+from plansys_bridge.errors import AdapterError
+
 REPO = Path(__file__).resolve().parents[3]
 CONFIG_DBC = REPO / "configs" / "can" / "mobile_base.dbc"
 
@@ -117,7 +119,7 @@ def test_counters_wrap(dbc: MobileBaseDbc) -> None:
 
 
 def test_out_of_range_command_is_refused(dbc: MobileBaseDbc) -> None:
-    with pytest.raises(Exception, match="BASE_VelocityCmd"):
+    with pytest.raises(AdapterError, match="cannot encode BASE_VelocityCmd"):
         dbc.encode(VelocityCommand(6.0, 0.0))
 
 

@@ -9,6 +9,7 @@ from typing import Any
 
 import pytest
 from can_rig import LOCATIONS, Rig, base_entry, can_rig
+from plansys_bridge_adapters.can.bus import BusOpenError
 from plansys_bridge_adapters.can.dbc import VelocityCommand
 from plansys_bridge_adapters.can.double import BaseDoubleConfig
 from plansys_bridge_adapters.can.performer import CanBasePerformer
@@ -384,7 +385,7 @@ def test_unopenable_interface_is_named(hub: Hub) -> None:
         context = PerformerContext(hub=hub, clock=hub.clock)
         entry = base_entry("can0", bus={"interface": "nosuchcan", "channel": "can0"})
         [performer] = CanBasePerformer.from_config(entry, context)
-        with pytest.raises(Exception, match="cannot open CAN bus nosuchcan:can0"):
+        with pytest.raises(BusOpenError, match="cannot open CAN bus nosuchcan:can0"):
             await performer.start()
 
     run(main(), hub.clock)

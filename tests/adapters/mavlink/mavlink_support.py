@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import socket
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from plansys_bridge_adapters.mavlink.performer import MavlinkPerformer
 
@@ -16,6 +17,14 @@ SPEEDUP = 40.0
 """Doubles run this much faster than real time: a whole mission takes about a second."""
 REPO = Path(__file__).resolve().parents[3]
 CONFIGS = REPO / "configs"
+
+
+def free_port(transport: Literal["tcp", "udp"] = "tcp") -> int:
+    """A loopback port nothing listens on right now (the OS picks it)."""
+    kind = socket.SOCK_STREAM if transport == "tcp" else socket.SOCK_DGRAM
+    with socket.socket(socket.AF_INET, kind) as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
 
 
 def make_hub() -> Hub:

@@ -9,6 +9,7 @@ import time
 from typing import Any
 
 import pytest
+from mavlink_support import free_port
 from plansys_bridge_adapters.mavlink.double import SimParams, VehicleDouble, VehicleSim
 from plansys_bridge_adapters.mavlink.geo import GeoPoint, offset
 from plansys_bridge_adapters.mavlink.modes import COPTER_MODES
@@ -174,9 +175,7 @@ def test_battery_drains_and_its_failsafe_fires() -> None:
 
 
 def test_command_line_serves_a_vehicle() -> None:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
+    port = free_port()
     proc = subprocess.Popen(
         [sys.executable, "-m", "plansys_bridge_adapters.mavlink.double", "--model", "rover",
          "--port", str(port), "--speedup", "10"],

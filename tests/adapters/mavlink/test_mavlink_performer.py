@@ -13,8 +13,9 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from mavlink_support import CONFIGS, SPEEDUP, build, make_hub, performer_config
+from mavlink_support import CONFIGS, SPEEDUP, build, free_port, make_hub, performer_config
 from plansys_bridge_adapters.mavlink.double import VehicleDouble
+from plansys_bridge_adapters.mavlink.errors import LinkError
 from plansys_bridge_adapters.mavlink.geo import distance_m, offset
 from plansys_bridge_adapters.mavlink.performer import MavlinkPerformer
 from pymavlink.dialects.v20 import ardupilotmega as ml
@@ -327,12 +328,7 @@ def test_telemetry_the_domain_lacks_is_dropped_once(copter: VehicleDouble) -> No
 
 
 def test_unreachable_vehicle_names_the_url(tmp_path: Path) -> None:
-    import socket
-
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
-    url = f"tcp:127.0.0.1:{port}"
+    url = f"tcp:127.0.0.1:{free_port()}"
 
     async def main() -> None:
         hub = make_hub()
@@ -340,7 +336,7 @@ def test_unreachable_vehicle_names_the_url(tmp_path: Path) -> None:
         performer = build(performer_config("uav1", url, "copter",
                                            timeouts={"connect": 0.6}), hub)
         try:
-            with pytest.raises(Exception, match=f"^{url}: cannot open the link"):
+            with pytest.raises(LinkError, match=f"^{url}: cannot open the link"):
                 await performer.start()
         finally:
             await hub.close()

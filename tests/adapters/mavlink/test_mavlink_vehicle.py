@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import asyncio
 import os
-import socket
 from collections.abc import Awaitable, Callable
 
 import pytest
-from mavlink_support import SPEEDUP
+from mavlink_support import SPEEDUP, free_port
 from plansys_bridge_adapters.mavlink.double import VehicleDouble
 from plansys_bridge_adapters.mavlink.errors import (
     CommandRefused,
@@ -21,12 +20,6 @@ from pymavlink.dialects.v20 import ardupilotmega as ml
 
 FAST = LinkSettings(heartbeat_timeout=0.5, command_timeout=0.2, command_retries=2,
                     connect_timeout=2.0)
-
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def with_vehicle(url: str, body: Callable[[MavlinkVehicle], Awaitable[None]]) -> MavlinkVehicle:
@@ -59,7 +52,7 @@ async def error_of(work: Awaitable[object], kind: type[Exception] = Exception) -
 
 @pytest.mark.parametrize("peer", [False, True], ids=["udpout", "udpin"])
 def test_udp_links_both_ways(peer: bool) -> None:
-    out = ("127.0.0.1", free_udp_port()) if peer else None
+    out = ("127.0.0.1", free_port("udp")) if peer else None
     with VehicleDouble("rover", speedup=SPEEDUP, ekf_delay=2.0, transport="udp",
                        peer=out) as double:
         v = with_vehicle(double.url, arm_guided)
