@@ -122,10 +122,6 @@ def _plan_from_ros(msg: Any) -> hm.Plan:
     )
 
 
-def _stamp(t: Any) -> float:
-    return float(t.sec) + float(t.nanosec) * 1e-9
-
-
 def read_mission(path: str | Path) -> RecordedMission:
     """Stream a mission bag and rebuild its plan and action outcomes."""
     path = Path(path)

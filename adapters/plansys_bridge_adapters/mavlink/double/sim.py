@@ -104,11 +104,6 @@ class SimParams:
     component_id: int = 1
 
 
-@dataclass
-class _Leg:
-    target: GeoPoint  # alt = metres above home
-
-
 class VehicleSim:
     """State and behaviour of one simulated ArduPilot vehicle."""
 
