@@ -12,7 +12,7 @@ For each pose topic of the bags in ../shared/bags (and the project's demo bag):
 * memory: tracemalloc peak while reading (Python allocations), and the process's
   peak RSS at the end (``resource.getrusage``).
 
-Run: ``/work/venv/bin/python benchmarks/bench_bag_replay.py [--bags DIR] [--json]``
+Run: ``python benchmarks/bench_bag_replay.py [--bags DIR] [--json]``
 """
 
 from __future__ import annotations

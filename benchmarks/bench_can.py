@@ -11,7 +11,7 @@
 * faults: mission seconds from injecting each fault to the action's FINISH (virtual
   clock, so the figure is exact: it is the detection latency the settings give).
 
-Run: ``/work/venv/bin/python benchmarks/bench_can.py [--json]``
+Run: ``python benchmarks/bench_can.py [--json]``
 """
 
 from __future__ import annotations

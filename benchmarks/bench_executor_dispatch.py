@@ -12,7 +12,7 @@ consecutive actions it measures, with ``time.perf_counter``:
 
 PlanSys2 ticks its tree at 10 Hz, so its successor starts up to 100 ms late.
 
-Run: ``/work/venv/bin/python benchmarks/bench_executor_dispatch.py [--actions N] [--json]``
+Run: ``python benchmarks/bench_executor_dispatch.py [--actions N] [--json]``
 """
 
 from __future__ import annotations

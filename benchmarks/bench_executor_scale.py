@@ -9,7 +9,7 @@ efficiency metric (summed action time over total time, so about 100 % per robot)
 
 Run::
 
-    /work/venv/bin/python benchmarks/bench_executor_scale.py [--sizes 100 500 1000 5000] [--json]
+    python benchmarks/bench_executor_scale.py [--sizes 100 500 1000 5000] [--json]
 """
 
 from __future__ import annotations

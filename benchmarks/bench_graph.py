@@ -12,7 +12,7 @@ reduction), time to compile the py_trees tree, and their sum.
 
 Run::
 
-    /work/venv/bin/python benchmarks/bench_graph.py [--sizes 100 500 1000 5000] \\
+    python benchmarks/bench_graph.py [--sizes 100 500 1000 5000] \\
         [--repeat 3] [--json]
 """
 

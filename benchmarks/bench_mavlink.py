@@ -10,7 +10,7 @@
 * faults: wall milliseconds from injecting a fault into the double to the action's
   FINISH(success=false) at the executor side (heartbeat loss: timeout set to 0.5 s).
 
-Run: ``/work/venv/bin/python benchmarks/bench_mavlink.py [--json]``
+Run: ``python benchmarks/bench_mavlink.py [--json]``
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Parse speed: plansys-bridge's PDDL parser against the ``pddl`` package and
 unified-planning's PDDLReader, on PlanSys2's corpus and on a large generated task.
 
-Run:  /work/venv/bin/python benchmarks/bench_parse.py [--repeat 5] [--objects 5000]
+Run:  python benchmarks/bench_parse.py [--repeat 5] [--objects 5000]
 
 Each number is the best of ``--repeat`` runs (seconds), every parser parsing the
 same text from memory. Ratios are peer time / our time, so > 1 means we are

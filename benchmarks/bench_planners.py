@@ -18,7 +18,7 @@ the rescheduled plan; ``check`` = time to validate and reschedule.
 
 Run::
 
-    /work/venv/bin/python benchmarks/bench_planners.py [--timeout 20] [--quick]
+    python benchmarks/bench_planners.py [--timeout 20] [--quick]
         [--solvers kairos lpg ...] [--improve 2] [--json]
 """
 
