@@ -622,7 +622,10 @@ def test_executor_runs_on_the_wall_clock(simple: tuple[Domain, ProblemExpert]) -
 
     res = run(main(), clock)
     assert res.success
-    assert res.total_time == pytest.approx(9.0, abs=1.5)
+    # Never sooner than the plan allows; how much later depends on the machine's load
+    # (a 10 ms stall is a whole second of mission time at this scale), so the upper
+    # bound only catches a run that waited on something other than the actions.
+    assert 9.0 - 0.01 <= res.total_time < 30.0
     starts = [a.start for a in res.actions]
     assert starts == sorted(starts)  # type: ignore[type-var]
 
