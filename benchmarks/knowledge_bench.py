@@ -116,6 +116,21 @@ def main() -> None:
         per=10000,
     )
 
+    notices: list[object] = []
+    pe.subscribe(notices.append)
+    live = steps[:1000]
+
+    def apply_live() -> None:
+        for step in live:
+            pe.apply(step.end_effect)
+
+    timed(
+        f"apply to the live knowledge, notified ({len(live)}x, {len(pe.get_instances())} objects)",
+        apply_live,
+        per=len(live),
+    )
+    assert len(notices) == len(live)
+
     small = ProblemExpert(de)
     small.load_problem(problem_text(args.closure, 1, 0))
     timed(

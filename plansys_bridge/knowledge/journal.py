@@ -10,7 +10,7 @@ inserted with and a rollback that puts keys back sorts the table by it.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import ItemsView, Iterator, KeysView, Mapping, ValuesView
 from typing import Generic, TypeVar
 
 K = TypeVar("K")
@@ -54,6 +54,20 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
 
     def get(self, key: K, default: V | None = None) -> V | None:  # type: ignore[override]
         return self._data.get(key, default)
+
+    # The dict's own views: Mapping's generic ones call __getitem__ once per key.
+    def keys(self) -> KeysView[K]:
+        return self._data.keys()
+
+    def items(self) -> ItemsView[K, V]:
+        return self._data.items()
+
+    def values(self) -> ValuesView[V]:
+        return self._data.values()
+
+    def copy(self) -> dict[K, V]:
+        """A plain dict of the entries, in insertion order."""
+        return self._data.copy()
 
     # ------------------------------------------------------------------ writing
 

@@ -429,7 +429,7 @@ class ProblemExpert:
     def get_instances(self) -> dict[str, str]:
         """Every object (name -> type), domain constants first."""
         with self._lock:
-            return {**self._constants, **self._instances}
+            return {**self._constants, **self._instances.copy()}
 
     def get_instance(self, name: str) -> str | None:
         """The type of an object (or constant), None when unknown."""
@@ -603,7 +603,9 @@ class ProblemExpert:
                 for key, number in values.items():
                     self._fluents.set(key, number)
                 self._state = self._state.with_changes(
-                    adds=facts, fluents=values, objects={**self._constants, **self._instances}
+                    adds=facts,
+                    fluents=values,
+                    objects={**self._constants, **self._instances.copy()},
                 )
                 if problem.goal != TRUE:
                     self.set_goal(problem.goal)
