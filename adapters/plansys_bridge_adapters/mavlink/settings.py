@@ -13,7 +13,7 @@ from typing import Any
 
 from plansys_bridge.errors import ConfigError
 
-from .checks import mapping, positive
+from ..checks import mapping, positive
 from .locations import LocationMap, load_locations
 from .modes import Model
 from .telemetry import TelemetryConfig

@@ -17,7 +17,7 @@ from typing import Any, Protocol
 
 from plansys_bridge.errors import ConfigError, PlansysBridgeError
 
-from .checks import mapping
+from ..checks import mapping
 from .vehicle import MavlinkVehicle
 
 log = logging.getLogger(__name__)

@@ -51,6 +51,7 @@ from plansys_bridge.performers.base import (
     PerformerContext,
 )
 
+from ..checks import mapping
 from .errors import BagError
 from .reader import BagReader, PoseSample
 from .route import PathProgress, Route, RouteError, Segment, SegmentProfile
@@ -72,11 +73,12 @@ class KnowledgeBinding:
     def from_config(cls, value: Any, key: str) -> KnowledgeBinding | None:
         if value is None:
             return None
-        if not isinstance(value, Mapping):
-            raise ConfigError("expected {robot_argument, functions, period}", key=key)
-        unknown = sorted(set(value) - {"robot_argument", "functions", "period"})
-        if unknown:
-            raise ConfigError(f"unknown key(s) {unknown}", key=key)
+        value = mapping(
+            value,
+            key,
+            ("robot_argument", "functions", "period"),
+            "expected {robot_argument, functions, period}",
+        )
         robot = value.get("robot_argument", 0)
         if isinstance(robot, bool) or not isinstance(robot, int) or robot < 0:
             raise ConfigError("expected an argument index >= 0", key=f"{key}.robot_argument")

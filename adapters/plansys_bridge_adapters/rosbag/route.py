@@ -15,7 +15,7 @@ made. The path length is measured once per segment in a streaming pass
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -24,6 +24,7 @@ import yaml
 
 from plansys_bridge.errors import ConfigError
 
+from ..checks import mapping
 from .errors import BagError
 from .reader import BagReader, PoseSample
 
@@ -208,13 +209,7 @@ class Route:
         segments: list[Segment] = []
         for i, entry in enumerate(entries):
             where = f"{key}[{i}]"
-            if not isinstance(entry, Mapping):
-                raise ConfigError("expected a mapping", key=where)
-            unknown = sorted(set(entry) - allowed)
-            if unknown:
-                raise ConfigError(
-                    f"unknown key(s) {unknown} (allowed: {sorted(allowed)})", key=where
-                )
+            entry = mapping(entry, where, allowed, "expected a mapping")
             bag = entry.get("bag", default_bag)
             topic = entry.get("topic", default_topic)
             if not isinstance(bag, str) or not bag:

@@ -101,7 +101,7 @@ def test_empty_window_is_an_error(demo_bags: Path) -> None:
         ([{"arguments": "a b", "bag": "x", "topic": "/o"}], "p.segments[0].arguments"),
         ([{"bag": "x", "topic": "/o", "start": 5, "end": 2}], "p.segments[0].end"),
         ([{"bag": "x", "topic": "/o", "start": -1}], "p.segments[0].start"),
-        ([{"bag": "x", "topic": "/o", "stat": 1}], "p.segments[0]"),
+        ([{"bag": "x", "topic": "/o", "stat": 1}], "p.segments[0].stat"),
         ("missing.yaml", "p.segments"),
     ],
 )

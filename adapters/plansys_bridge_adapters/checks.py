@@ -1,4 +1,4 @@
-"""Checks shared by the adapter's configuration parsers; errors name the key."""
+"""Checks shared by the adapters' configuration parsers; errors name the key."""
 
 from __future__ import annotations
 
