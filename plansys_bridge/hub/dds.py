@@ -17,9 +17,10 @@ differently than in the in-process transport). A message a process publishes rea
 its own subscribers through DDS as well.
 
 Duplicates: on a topic with a project wrapper, a project process writes both the
-plain message and the wrapper. Its plain writers carry a USER_DATA marker; receivers
-skip plain samples from marked writers and take the complete message from the
-wrapper topic, while plain samples from other DDS nodes are delivered as they are.
+plain message and the wrapper. Receivers take the complete message from the wrapper
+topic and skip plain samples of project writers, known by their USER_DATA marker or
+by their participant also writing the wrapper topic; plain samples from other DDS
+nodes (a ROS 2 PlanSys2 node) are delivered as they are.
 
 Topics without a DDS type (an adapter's own topic) are delivered inside the process
 only, as the in-process transport would; the first such publish logs a warning.
@@ -165,7 +166,7 @@ class DdsTransport:
         """Local fan-out to this process's subscribers, on the loop, in arrival order."""
         self._endpoints: list[_Endpoint] = []
         self._writers: dict[str, tuple[Any, Any]] = {}
-        self._marked: dict[int, bool] = {}
+        self._project_writers: set[int] = set()
         self._loop: asyncio.AbstractEventLoop | None = None
         self._participant: Any = None
         self._waitset: Any = None
@@ -316,24 +317,25 @@ class DdsTransport:
 
         DDS drops what is written before a reader is matched; a caller that must not
         lose its first messages waits here (the auction re-sends REQUESTs anyway).
+        Every DDS topic of the hub topic counts: the plain one and the project wrapper.
         """
         if self._thread is None:
             raise HubError("start the DDS transport before waiting for peers")
         route = ROUTES.get(topic)
         if route is None:
             raise HubError(f"topic {topic!r} has no DDS type")
-        writer = self._writers[topic][0]
+        writers = [w for w in self._writers[topic] if w is not None]
         loop = asyncio.get_running_loop()
         deadline = loop.time() + timeout
         while True:
-            # Our own reader of the topic is one of the matched subscriptions.
-            matched = writer.get_publication_matched_status().current_count - 1
+            # Our own reader of each DDS topic is one of its matched subscriptions.
+            matched = min(w.get_publication_matched_status().current_count - 1 for w in writers)
             if matched >= count:
                 return
             if loop.time() >= deadline:
                 raise HubError(
                     f"DDS domain {self.domain_id}: {matched} of {count} peers on "
-                    f"{route.plain.dds_topic} after {timeout:g} s"
+                    f"{', '.join(c.dds_topic for c in route.channels)} after {timeout:g} s"
                 )
             await asyncio.sleep(0.02)
 
@@ -369,7 +371,7 @@ class DdsTransport:
                 info = sample.sample_info
                 if not info.valid_data:
                     continue
-                if skip_marked and self._from_project(ep.reader, info.publication_handle):
+                if skip_marked and self._from_project(ep, info.publication_handle):
                     continue
                 try:
                     batch.append(decode(ep.channel, sample))
@@ -377,23 +379,39 @@ class DdsTransport:
                     self.dropped += 1
                     log.warning("%s: dropping a sample: %s", ep.channel.dds_topic, exc)
 
-    def _from_project(self, reader: Any, handle: int) -> bool:
-        """Whether the writer ``handle`` is a project writer (its message comes wrapped)."""
-        known = self._marked.get(handle)
-        if known is not None:
-            return known
-        endpoint = reader.get_matched_publication_data(handle)
+    def _from_project(self, ep: _Endpoint, handle: int) -> bool:
+        """Whether the writer ``handle`` is a project writer (its message comes wrapped).
+
+        A project writer carries the USER_DATA marker, and its participant also writes
+        the wrapper topic. Either sign suffices: right after discovery the matched
+        writer's QoS may still lack its USER_DATA. Only "yes" is remembered.
+        """
+        if handle in self._project_writers:
+            return True
+        endpoint = ep.reader.get_matched_publication_data(handle)
         if endpoint is None:
             # The writer left before we looked: only project writers publish both
             # copies and leave together with their wrapper, so assume it was one.
             return True
         try:
-            userdata = endpoint.qos[Policy.Userdata].data
+            marked = endpoint.qos[Policy.Userdata].data == PROJECT_MARKER
         except (KeyError, AttributeError):
-            userdata = b""
-        marked = userdata == PROJECT_MARKER
-        self._marked[handle] = marked
+            marked = False
+        if not marked:
+            marked = endpoint.participant_key in self._wrapper_participants(ep.route)
+        if marked:
+            self._project_writers.add(handle)
         return marked
+
+    def _wrapper_participants(self, route: Route) -> set[Any]:
+        """Participants with a writer on ``route``'s wrapper topic: project processes."""
+        wrapper = next(e for e in self._endpoints if e.route is route and e.channel.project)
+        keys = set()
+        for handle in wrapper.reader.get_matched_publications():
+            endpoint = wrapper.reader.get_matched_publication_data(handle)
+            if endpoint is not None:
+                keys.add(endpoint.participant_key)
+        return keys
 
     def __repr__(self) -> str:
         state = "closed" if self._closed else "started" if self._thread else "new"

@@ -68,7 +68,7 @@ def test_normal_action_message_order_over_dds(hub_recorder: Any) -> None:
         ("FINISH", "r1_move"),
     ]
     # The project fields crossed DDS on the wrapper topic, each message exactly once.
-    assert all(m.request_id == "plan1:0" for m in executions)
+    assert all(m.request_id == "plan1:0" for m in executions), executions
     assert all(m.arguments == ("r1", "a", "b") for m in executions)
     assert executions[-1].type == ExecutionType.FINISH and executions[-1].success
     assert outcome.success and outcome.performer == "r1_move"
