@@ -209,7 +209,9 @@ def test_misuse_is_a_clear_error() -> None:
         try:
             with pytest.raises(HubError, match="cannot publish Knowledge on 'actions_hub'"):
                 t.publish(hm.Topics.ACTIONS_HUB, hm.Knowledge())
-            with pytest.raises(HubError, match="0 of 1 peers on rt/actions_hub, rt/plansys_bridge/actions_hub"):
+            with pytest.raises(
+                HubError, match="0 of 1 peers on rt/actions_hub, rt/plansys_bridge/actions_hub"
+            ):
                 await t.wait_for_peers(1, timeout=0.1)
         finally:
             await t.close()
