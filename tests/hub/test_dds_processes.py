@@ -152,3 +152,15 @@ def test_dds_with_the_virtual_clock_is_refused_on_load(tmp_path: Path) -> None:
     )
     with pytest.raises(ConfigError, match="dds transport needs the wall clock"):
         load_mission(path)
+
+
+def test_dds_settings_belong_to_the_dds_transport(tmp_path: Path) -> None:
+    path = write_mission(tmp_path)
+    text = path.read_text(encoding="utf-8")
+    line = text[text.index("transport:") :].split("\n")[0]
+    path.write_text(text.replace(line, "transport: {kind: inprocess, domain_id: 3}"), "utf-8")
+    with pytest.raises(ConfigError, match="domain_id applies to the dds transport only"):
+        load_mission(path)
+    path.write_text(text.replace(line, "transport: {kind: dds, domain_id: 233}"), "utf-8")
+    with pytest.raises(ConfigError, match=r"transport\.domain_id"):
+        load_mission(path)
