@@ -331,9 +331,7 @@ def run_mission(
             key="transport.kind",
             file=mission.source,
         )
-    return run(
-        _run(mission, domain, knowledge, clock, planner, plan, out, local_performers), clock
-    )
+    return run(_run(mission, domain, knowledge, clock, planner, plan, out, local_performers), clock)
 
 
 async def _run(
