@@ -65,6 +65,9 @@ def loopback_config(
         f"<MaxAutoParticipantIndex>{max_participants - 1}</MaxAutoParticipantIndex>"
         f"<Peers><Peer address={addr}/></Peers>"
         "</Discovery>"
+        # A closing writer waits this long for unacknowledged data: plenty on loopback,
+        # and a peer that died without leaving does not hold the shutdown for seconds.
+        "<Internal><WriterLingerDuration>100 ms</WriterLingerDuration></Internal>"
         "</Domain>"
         "</CycloneDDS>"
     )

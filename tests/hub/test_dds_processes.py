@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import os
 import random
 import selectors
@@ -72,10 +74,9 @@ def read_line(proc: subprocess.Popen[str], timeout: float) -> str:
     return proc.stdout.readline()
 
 
-@pytest.fixture
-def performers_process(tmp_path: Path) -> Iterator[tuple[Path, subprocess.Popen[str]]]:
-    """``plansys-bridge performers MISSION`` running in a subprocess, stopped afterwards."""
-    mission = write_mission(tmp_path)
+@contextlib.contextmanager
+def performers_in_subprocess(mission: Path) -> Iterator[subprocess.Popen[str]]:
+    """``plansys-bridge performers MISSION`` in a subprocess, killed if still running."""
     proc = subprocess.Popen(
         [sys.executable, "-m", "plansys_bridge", "performers", str(mission), "--duration", "80"],
         stdout=subprocess.PIPE,
@@ -84,11 +85,18 @@ def performers_process(tmp_path: Path) -> Iterator[tuple[Path, subprocess.Popen[
         env=os.environ | {"PYTHONUNBUFFERED": "1"},
     )
     try:
-        yield mission, proc
+        yield proc
     finally:
         if proc.poll() is None:
             proc.kill()
-        proc.wait(timeout=10)
+        proc.communicate(timeout=10)
+
+
+@pytest.fixture
+def performers_process(tmp_path: Path) -> Iterator[tuple[Path, subprocess.Popen[str]]]:
+    mission = write_mission(tmp_path)
+    with performers_in_subprocess(mission) as proc:
+        yield mission, proc
 
 
 def test_executor_here_performers_in_a_subprocess(
@@ -164,3 +172,36 @@ def test_dds_settings_belong_to_the_dds_transport(tmp_path: Path) -> None:
     path.write_text(text.replace(line, "transport: {kind: dds, domain_id: 233}"), "utf-8")
     with pytest.raises(ConfigError, match=r"transport\.domain_id"):
         load_mission(path)
+
+
+def test_a_killed_performer_process_fails_the_action_instead_of_hanging(tmp_path: Path) -> None:
+    """PlanSys2 leaves the action RUNNING forever (#399); here liveness catches it."""
+    path = write_mission(tmp_path)
+    text = path.read_text(encoding="utf-8").replace(
+        "default_duration: 1.0", "default_duration: 50.0"
+    )
+    path.write_text(
+        text
+        + "auction: {liveness_timeout: 1.0, reauctions: 0, give_up_after: 2.0}\n"
+        + "replanning: {max_replans: 0}\n",
+        encoding="utf-8",
+    )
+    lines: list[str] = []
+    with performers_in_subprocess(path) as proc:
+        assert read_line(proc, timeout=30).startswith("performers ready")
+
+        def kill_when_executing(line: str) -> None:
+            lines.append(line)
+            if "EXECUTING" in line and not lines_killed:
+                # Half a second into the 10 s actions, long after CONFIRM: the process
+                # vanishes without a goodbye (no FINISH, no heartbeat).
+                lines_killed.append(asyncio.get_running_loop().call_later(0.5, proc.kill))
+
+        lines_killed: list[asyncio.TimerHandle] = []
+
+        report = run_mission(load_mission(path), out=kill_when_executing, local_performers=False)
+    assert not report.success
+    assert report.result is not None
+    failed = [a for a in report.result.actions if a.status == ActionStatus.FAILED]
+    assert failed, "\n".join(lines)
+    assert any("performer r1_base lost" in line for line in lines), "\n".join(lines)
