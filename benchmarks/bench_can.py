@@ -118,9 +118,12 @@ def bench_latency(reader: str, samples: int = 300) -> dict[str, float]:
 
 def _performer(hub: Hub, channel: str, **extra: Any) -> CanBasePerformer:
     entry = {
-        "kind": "can", "name": "base", "robot": "r1",
+        "kind": "can",
+        "name": "base",
+        "robot": "r1",
         "actions": {"move": {"robot": 0, "destination": 2}},
-        "locations": LOCATIONS, "bus": {"interface": "virtual", "channel": channel},
+        "locations": LOCATIONS,
+        "bus": {"interface": "virtual", "channel": channel},
         **extra,
     }
     [performer] = CanBasePerformer.from_config(entry, PerformerContext(hub=hub, clock=hub.clock))
@@ -176,9 +179,12 @@ def bench_faults() -> dict[str, float]:
         hub = Hub(InProcessTransport(), clock)
         channel = f"bench-fault-{i}"
 
-        async def main(inject: Callable[[BaseDouble], None] = inject,
-                       hub: Hub = hub, clock: VirtualClock = clock,
-                       channel: str = channel) -> float:
+        async def main(
+            inject: Callable[[BaseDouble], None] = inject,
+            hub: Hub = hub,
+            clock: VirtualClock = clock,
+            channel: str = channel,
+        ) -> float:
             await hub.start()
             double = BaseDouble(clock, BusConfig(channel=channel), BaseDoubleConfig())
             async with double as base, _performer(hub, channel):
@@ -216,8 +222,11 @@ def main(argv: list[str] | None = None) -> int:
     for section, values in results.items():
         print(section)
         for key, value in values.items():
-            print(f"  {key:24s} {value:10.3f}" if isinstance(value, float)
-                  else f"  {key:24s} {value:10d}")
+            print(
+                f"  {key:24s} {value:10.3f}"
+                if isinstance(value, float)
+                else f"  {key:24s} {value:10d}"
+            )
     return 0
 
 

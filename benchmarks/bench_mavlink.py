@@ -48,8 +48,9 @@ async def _command_latency(url: str, n: int) -> list[float]:
         out = []
         for _ in range(n):
             t = time.perf_counter()
-            await v.command(ml.MAV_CMD_SET_MESSAGE_INTERVAL,
-                            ml.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 100_000)
+            await v.command(
+                ml.MAV_CMD_SET_MESSAGE_INTERVAL, ml.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 100_000
+            )
             out.append((time.perf_counter() - t) * 1000)
         return out
     finally:
@@ -93,12 +94,18 @@ def telemetry(speedups: tuple[float, ...] = (1, 5, 20)) -> dict[str, float]:
 
 def _config(url: str, heartbeat: float = 3.0) -> dict[str, Any]:
     return {
-        "kind": "mavlink", "name": "uav1_performer", "vehicle": "uav1", "url": url,
-        "locations": "mavlink_locations.yaml", "heartbeat_period": 0.2,
+        "kind": "mavlink",
+        "name": "uav1_performer",
+        "vehicle": "uav1",
+        "url": url,
+        "locations": "mavlink_locations.yaml",
+        "heartbeat_period": 0.2,
         "actions": {"takeoff": [], "fly": [], "land": []},
-        "commands": {"takeoff": {"do": "takeoff", "vehicle_arg": 0, "altitude": 10},
-                     "fly": {"do": "goto", "vehicle_arg": 0, "target_arg": 2},
-                     "land": {"do": "land", "vehicle_arg": 0}},
+        "commands": {
+            "takeoff": {"do": "takeoff", "vehicle_arg": 0, "altitude": 10},
+            "fly": {"do": "goto", "vehicle_arg": 0, "target_arg": 2},
+            "land": {"do": "land", "vehicle_arg": 0},
+        },
         "timeouts": {"heartbeat": heartbeat, "command": 0.5},
     }
 
@@ -121,8 +128,12 @@ async def _act(hub: Hub, action: str, *args: str) -> Any:
 
 
 def mission(speedups: tuple[float, ...] = (5, 20, 40)) -> dict[str, dict[str, float]]:
-    steps = [("takeoff", "uav1", "pad"), ("fly", "uav1", "pad", "north_field"),
-             ("fly", "uav1", "north_field", "east_field"), ("land", "uav1", "east_field")]
+    steps = [
+        ("takeoff", "uav1", "pad"),
+        ("fly", "uav1", "pad", "north_field"),
+        ("fly", "uav1", "north_field", "east_field"),
+        ("land", "uav1", "east_field"),
+    ]
     out = {}
     for s in speedups:
         with VehicleDouble("copter", speedup=s, ekf_delay=20.0) as double:
@@ -150,8 +161,9 @@ def faults(speedup: float = 20.0) -> dict[str, float]:
     for name, inject in injections.items():
         with VehicleDouble("copter", speedup=speedup, ekf_delay=2.0, cruise_speed=1.0) as double:
 
-            async def body(hub: Hub, d: VehicleDouble = double,
-                           fire: Callable[[VehicleDouble], None] = inject) -> float:
+            async def body(
+                hub: Hub, d: VehicleDouble = double, fire: Callable[[VehicleDouble], None] = inject
+            ) -> float:
                 assert (await _act(hub, "takeoff", "uav1", "pad")).success
                 flight = asyncio.ensure_future(_act(hub, "fly", "uav1", "pad", "north_field"))
                 while d.state()["north"] < 2:
@@ -170,20 +182,28 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
-    results = {"commands": commands(), "telemetry_msgs_per_s": telemetry(),
-               "mission": mission(), "faults": faults()}
+    results = {
+        "commands": commands(),
+        "telemetry_msgs_per_s": telemetry(),
+        "mission": mission(),
+        "faults": faults(),
+    }
     if args.json:
         json.dump(results, sys.stdout, indent=2)
         print()
         return 0
     for transport, r in results["commands"].items():
-        print(f"COMMAND_ACK round trip {transport}: median {r['median_ms']:.2f} ms, "
-              f"p99 {r['p99_ms']:.2f} ms")
+        print(
+            f"COMMAND_ACK round trip {transport}: median {r['median_ms']:.2f} ms, "
+            f"p99 {r['p99_ms']:.2f} ms"
+        )
     for s, rate in results["telemetry_msgs_per_s"].items():
         print(f"GLOBAL_POSITION_INT at 10 Hz vehicle time, {s}: {rate:.0f} msg/s")
     for s, r in results["mission"].items():
-        print(f"copter mission (EKF wait, take-off, 2 legs, land) {s}: "
-              f"{r['wall_s']:.2f} s wall, {r['vehicle_s']:.0f} s vehicle time")
+        print(
+            f"copter mission (EKF wait, take-off, 2 legs, land) {s}: "
+            f"{r['wall_s']:.2f} s wall, {r['vehicle_s']:.0f} s vehicle time"
+        )
     for name, ms in results["faults"].items():
         print(f"fault -> FINISH(failure) {name}: {ms:.0f}")
     return 0

@@ -20,6 +20,11 @@ def test_ruff_clean() -> None:
     assert result.returncode == 0, result.stdout + result.stderr
 
 
+def test_ruff_format_clean() -> None:
+    result = _run("ruff", "format", "--check", "--no-cache", ".")
+    assert result.returncode == 0, result.stdout + result.stderr
+
+
 def test_mypy_clean() -> None:
     result = _run("mypy", "--no-incremental")
     assert result.returncode == 0, result.stdout + result.stderr

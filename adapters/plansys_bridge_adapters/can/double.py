@@ -190,9 +190,7 @@ class BaseDouble:
 
     @property
     def faults(self) -> FaultBits:
-        return replace(
-            self._faults, estop=self.estop_active, watchdog=self._watchdog_tripped
-        )
+        return replace(self._faults, estop=self.estop_active, watchdog=self._watchdog_tripped)
 
     @property
     def state(self) -> BaseState:
@@ -258,8 +256,13 @@ class BaseDouble:
         for _ in range(count):
             self.client.send_raw(
                 # As SocketCAN delivers it: the error class (0x080 bus error) in the ID.
-                can.Message(arbitration_id=0x080, is_extended_id=False, is_error_frame=True,
-                            dlc=8, data=bytes(8))
+                can.Message(
+                    arbitration_id=0x080,
+                    is_extended_id=False,
+                    is_error_frame=True,
+                    dlc=8,
+                    data=bytes(8),
+                )
             )
 
     def send_garbage(self, count: int = 20, seed: int = 0) -> list[can.Message]:
@@ -273,27 +276,41 @@ class BaseDouble:
             if choice == 0:  # unknown standard ID
                 ids = {m.frame_id for m in dbc.database.messages}
                 frame_id = rng.choice([n for n in range(0x7F0, 0x800) if n not in ids])
-                msg = can.Message(arbitration_id=frame_id, is_extended_id=False,
-                                  data=rng.randbytes(rng.randint(0, 8)))
+                msg = can.Message(
+                    arbitration_id=frame_id,
+                    is_extended_id=False,
+                    data=rng.randbytes(rng.randint(0, 8)),
+                )
             elif choice == 1:  # known ID, wrong length
                 message = rng.choice(known)
                 length = rng.choice([n for n in range(0, 9) if n != message.length])
-                msg = can.Message(arbitration_id=message.frame_id, is_extended_id=False,
-                                  data=rng.randbytes(length))
+                msg = can.Message(
+                    arbitration_id=message.frame_id,
+                    is_extended_id=False,
+                    data=rng.randbytes(length),
+                )
             elif choice == 2:  # extended ID that happens to equal a known standard one
-                msg = can.Message(arbitration_id=rng.choice(known).frame_id,
-                                  is_extended_id=True, data=rng.randbytes(8))
+                msg = can.Message(
+                    arbitration_id=rng.choice(known).frame_id,
+                    is_extended_id=True,
+                    data=rng.randbytes(8),
+                )
             elif choice == 3:  # remote frame
                 message = rng.choice(known)
-                msg = can.Message(arbitration_id=message.frame_id, is_extended_id=False,
-                                  is_remote_frame=True, dlc=message.length)
+                msg = can.Message(
+                    arbitration_id=message.frame_id,
+                    is_extended_id=False,
+                    is_remote_frame=True,
+                    dlc=message.length,
+                )
             else:  # status with signals outside their DBC range
                 message = dbc.message_for(BaseStatus)
                 data = bytearray(message.length)
                 data[0] = 0xFF  # BatteryPercent 127.5 %
                 data[3] = 0x0F  # BaseState 15
-                msg = can.Message(arbitration_id=message.frame_id, is_extended_id=False,
-                                  data=bytes(data))
+                msg = can.Message(
+                    arbitration_id=message.frame_id, is_extended_id=False, data=bytes(data)
+                )
             self.client.send_raw(msg)
             sent.append(msg)
         return sent
@@ -453,7 +470,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     bus = BusConfig(interface=args.interface, channel=args.channel, bitrate=args.bitrate)
     config = BaseDoubleConfig(
-        x=args.x, y=args.y, yaw=args.yaw, watchdog_timeout=args.watchdog_timeout,
+        x=args.x,
+        y=args.y,
+        yaw=args.yaw,
+        watchdog_timeout=args.watchdog_timeout,
         battery_percent=args.battery,
     )
     try:

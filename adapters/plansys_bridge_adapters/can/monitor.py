@@ -165,8 +165,10 @@ class BaseMonitor:
                 f"{describe_error_frame(self.last_error_frame)}"
             )
         if _stale(now, self.heartbeat_time, heartbeat_timeout):
-            age = "never received" if self.heartbeat_time is None else (
-                f"none with a new counter for {now - self.heartbeat_time:.2f} s"
+            age = (
+                "never received"
+                if self.heartbeat_time is None
+                else (f"none with a new counter for {now - self.heartbeat_time:.2f} s")
             )
             return Problem(
                 f"base heartbeat lost on {self.where}: BASE_Status {age} "
@@ -196,8 +198,10 @@ class BaseMonitor:
                     f"{now - heard:.2f} s (odometry timeout {odometry_timeout:g} s)",
                     transient=True,
                 )
-            age = "never received" if self.pose_time is None else (
-                f"last {now - self.pose_time:.2f} s ago"
+            age = (
+                "never received"
+                if self.pose_time is None
+                else (f"last {now - self.pose_time:.2f} s ago")
             )
             return Problem(
                 f"odometry lost on {self.where}: BASE_OdomPose {age} "

@@ -127,8 +127,9 @@ class CanBasePerformer(ActionPerformer):
         # by this kind; the framework checks the common keys on the derived spec lists.
         settings_in = {k: v for k, v in config.items() if k in cls.settings_keys}
         settings, specs = parse_settings(settings_in, config.get("actions"), context.base_dir, key)
-        parsed = cls.parse_config({**config, "actions": {a: list(s) for a, s in specs.items()}},
-                                  key=key)
+        parsed = cls.parse_config(
+            {**config, "actions": {a: list(s) for a, s in specs.items()}}, key=key
+        )
         try:
             performer = cls(
                 context,
@@ -361,9 +362,10 @@ class CanBasePerformer(ActionPerformer):
             if now >= next_feedback:
                 next_feedback = now + self.settings.feedback_period
                 self.feedback(out.progress, f"{location.name}: {out.distance_to_goal:.2f} m to go")
-            moved = math.hypot(pose.x - anchor.x, pose.y - anchor.y) > 0.01 or abs(
-                math.remainder(pose.yaw - anchor.yaw, math.tau)
-            ) > 0.02
+            moved = (
+                math.hypot(pose.x - anchor.x, pose.y - anchor.y) > 0.01
+                or abs(math.remainder(pose.yaw - anchor.yaw, math.tau)) > 0.02
+            )
             if moved:
                 anchor, anchor_time = pose, now
             elif now - anchor_time > safety.stall_timeout:
@@ -390,8 +392,10 @@ class CanBasePerformer(ActionPerformer):
                 return
             if self.clock.now() - start > safety.stop_timeout:
                 twist = self.monitor.twist
-                seen = "no odometry" if twist is None else (
-                    f"last twist v={twist.linear:.3f} m/s w={twist.angular:.3f} rad/s"
+                seen = (
+                    "no odometry"
+                    if twist is None
+                    else (f"last twist v={twist.linear:.3f} m/s w={twist.angular:.3f} rad/s")
                 )
                 raise _BaseFailure(
                     f"base did not confirm standstill within {safety.stop_timeout:g} s ({seen})"
@@ -435,8 +439,9 @@ class CanBasePerformer(ActionPerformer):
             return
         self._next_record = now + self.settings.record_period
         try:
-            record_pose(self.settings.record_topic, now, pose.x, pose.y, 0.0, pose.yaw,
-                        frame_id="odom")
+            record_pose(
+                self.settings.record_topic, now, pose.x, pose.y, 0.0, pose.yaw, frame_id="odom"
+            )
         except PlansysBridgeError as exc:
             # A full disk must not stop the robot; the bag just loses the poses.
             _LOG.error("%s: recording poses stopped: %s", self.node_name, exc)
@@ -487,4 +492,3 @@ class CanBasePerformer(ActionPerformer):
                 _LOG.error("%s: knowledge refused %s: %s", self.node_name, fact, text)
             return False
         return True
-

@@ -178,7 +178,8 @@ def _hint_text(hint: object) -> str:
     if hint is type(None):
         return "null"
     return {float: "a number", int: "an integer", bool: "true/false", str: "a string"}.get(
-        hint, str(hint)  # type: ignore[call-overload]
+        hint,
+        str(hint),  # type: ignore[call-overload]
     )
 
 
@@ -344,21 +345,31 @@ def parse_bus(value: object, key: str) -> BusConfig:
         return BusConfig()
     if not isinstance(value, Mapping):
         raise ConfigError(f"must be a mapping, got {value!r}", key=key)
-    allowed = ("interface", "channel", "bitrate", "reader", "poll_period", "send_timeout",
-               "reopen_period", "options")
+    allowed = (
+        "interface",
+        "channel",
+        "bitrate",
+        "reader",
+        "poll_period",
+        "send_timeout",
+        "reopen_period",
+        "options",
+    )
     for item in value:
         if item not in allowed:
             raise ConfigError(f"unknown key (allowed: {', '.join(allowed)})", key=f"{key}.{item}")
     interface = value.get("interface", "virtual")
     channel = value.get("channel", "plansys_can0")
     if not isinstance(interface, str) or not interface:
-        raise ConfigError(f"must be a python-can interface name, got {interface!r}",
-                          key=f"{key}.interface")
+        raise ConfigError(
+            f"must be a python-can interface name, got {interface!r}", key=f"{key}.interface"
+        )
     if not isinstance(channel, str | int) or isinstance(channel, bool):
         raise ConfigError(f"must be a channel name, got {channel!r}", key=f"{key}.channel")
     bitrate = value.get("bitrate")
-    if bitrate is not None and (isinstance(bitrate, bool) or not isinstance(bitrate, int)
-                                or bitrate <= 0):
+    if bitrate is not None and (
+        isinstance(bitrate, bool) or not isinstance(bitrate, int) or bitrate <= 0
+    ):
         raise ConfigError(f"must be a positive integer, got {bitrate!r}", key=f"{key}.bitrate")
     reader = value.get("reader", "auto")
     if reader not in ("auto", "notifier", "poll"):
@@ -440,8 +451,10 @@ def parse_settings(
     record_period = _positive(settings.get("record_period", 0.1), f"{key}.record_period")
     record_topic = settings.get("record_topic") or f"/{robot}/pose"
     if not isinstance(record_topic, str) or not record_topic.startswith("/"):
-        raise ConfigError(f"must be a topic name starting with '/', got {record_topic!r}",
-                          key=f"{key}.record_topic")
+        raise ConfigError(
+            f"must be a topic name starting with '/', got {record_topic!r}",
+            key=f"{key}.record_topic",
+        )
     parsed = CanBaseSettings(
         robot=robot,
         motions=motions,

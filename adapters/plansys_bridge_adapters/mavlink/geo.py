@@ -46,9 +46,7 @@ def north_east_m(origin: GeoPoint, point: GeoPoint) -> tuple[float, float]:
     """Inverse of :func:`offset` (horizontal part): metres north and east of ``origin``."""
     north = math.radians(point.lat - origin.lat) * EARTH_RADIUS_M
     east = (
-        math.radians(point.lon - origin.lon)
-        * EARTH_RADIUS_M
-        * math.cos(math.radians(origin.lat))
+        math.radians(point.lon - origin.lon) * EARTH_RADIUS_M * math.cos(math.radians(origin.lat))
     )
     return north, east
 

@@ -111,8 +111,11 @@ def parse_locations(data: object, *, source: str, key: str) -> LocationMap:
         o = data["origin"]
         if not isinstance(o, Mapping) or "lat" not in o or "lon" not in o:
             raise err("origin needs lat and lon", "origin")
-        origin = GeoPoint(_number(o["lat"], err, "origin.lat"), _number(o["lon"], err,
-                          "origin.lon"), _number(o.get("alt", 0.0), err, "origin.alt"))
+        origin = GeoPoint(
+            _number(o["lat"], err, "origin.lat"),
+            _number(o["lon"], err, "origin.lon"),
+            _number(o.get("alt", 0.0), err, "origin.alt"),
+        )
     default_alt = None
     if data.get("default_alt") is not None:
         default_alt = _number(data["default_alt"], err, "default_alt")
@@ -128,8 +131,10 @@ def parse_locations(data: object, *, source: str, key: str) -> LocationMap:
             raise err("must be a mapping like {north: 10, east: 5} or {lat: .., lon: ..}", where)
         for field_name in entry:
             if field_name not in _LOCATION_KEYS:
-                raise err(f"unknown key (allowed: {', '.join(sorted(_LOCATION_KEYS))})",
-                          f"{where}.{field_name}")
+                raise err(
+                    f"unknown key (allowed: {', '.join(sorted(_LOCATION_KEYS))})",
+                    f"{where}.{field_name}",
+                )
         values = {k: _number(v, err, f"{where}.{k}") for k, v in entry.items()}
         absolute = "lat" in values or "lon" in values
         relative = "north" in values or "east" in values

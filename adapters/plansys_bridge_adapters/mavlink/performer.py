@@ -72,12 +72,20 @@ class MavlinkPerformer(ActionPerformer):
         commit_timeout: float = 2.0,
     ) -> None:
         if isinstance(context.clock, VirtualClock):
-            raise ConfigError("a MAVLink vehicle runs in real time: use a wall clock "
-                              "(clock: {kind: wall}), not the virtual clock", key="clock.kind")
+            raise ConfigError(
+                "a MAVLink vehicle runs in real time: use a wall clock "
+                "(clock: {kind: wall}), not the virtual clock",
+                key="clock.kind",
+            )
         if settings.url is None and settings.double is None:
             raise ConfigError("give the vehicle's url, or double: {model: ...}", key="url")
-        super().__init__(context, node_name, actions, heartbeat_period=heartbeat_period,
-                         commit_timeout=commit_timeout)
+        super().__init__(
+            context,
+            node_name,
+            actions,
+            heartbeat_period=heartbeat_period,
+            commit_timeout=commit_timeout,
+        )
         self.settings = settings
         self.commands = {a: settings.commands.get(a) or default_command(a) for a in self.actions}
         self.double: VehicleDouble | None = None
@@ -94,14 +102,19 @@ class MavlinkPerformer(ActionPerformer):
             model = opts.pop("model", s.model or "copter")
             home = opts.pop("home", None)
             if isinstance(home, Mapping):
-                opts["home"] = GeoPoint(float(home["lat"]), float(home["lon"]),
-                                        float(home.get("alt", 584.0)))
+                opts["home"] = GeoPoint(
+                    float(home["lat"]), float(home["lon"]), float(home.get("alt", 584.0))
+                )
             self.double = VehicleDouble(model, **opts).start()
             url = self.double.url
         assert url is not None
         t = s.timeouts
-        link = LinkSettings(connect_timeout=t.connect, heartbeat_timeout=t.heartbeat,
-                            command_timeout=t.command, telemetry_hz=s.telemetry_hz)
+        link = LinkSettings(
+            connect_timeout=t.connect,
+            heartbeat_timeout=t.heartbeat,
+            command_timeout=t.command,
+            telemetry_hz=s.telemetry_hz,
+        )
         self.vehicle = MavlinkVehicle(url, link)
         try:
             await self.vehicle.connect()
@@ -111,11 +124,11 @@ class MavlinkPerformer(ActionPerformer):
         if s.model is not None and self.vehicle.model != s.model:
             found = self.vehicle.model
             await self.teardown()
-            raise ConfigError(f"{url}: expected a {s.model}, the vehicle is a {found}",
-                              key="model")
+            raise ConfigError(f"{url}: expected a {s.model}, the vehicle is a {found}", key="model")
         if s.telemetry.enabled and self.context.knowledge is not None:
-            self.telemetry = TelemetryPublisher(self.vehicle, self.context.knowledge,
-                                                s.vehicle, s.telemetry)
+            self.telemetry = TelemetryPublisher(
+                self.vehicle, self.context.knowledge, s.vehicle, s.telemetry
+            )
             self.telemetry.start()
 
     async def teardown(self) -> None:
@@ -248,8 +261,9 @@ class MavlinkPerformer(ActionPerformer):
         name = goal.arguments[cmd.target_arg]
         if v.model == "copter":
             if not v.telemetry.armed or pos.alt < self.settings.altitude_tolerance:
-                raise ActionFailed(f"{v.url}: the copter is on the ground; take off before "
-                                   f"flying to {name}")
+                raise ActionFailed(
+                    f"{v.url}: the copter is on the ground; take off before flying to {name}"
+                )
             await v.set_mode("GUIDED")
             v.expect_armed = True
         else:
@@ -334,8 +348,9 @@ class MavlinkPerformer(ActionPerformer):
 
     def _check_deadline(self, v: MavlinkVehicle, deadline: float, what: str) -> None:
         if asyncio.get_running_loop().time() > deadline:
-            raise ActionFailed(f"{v.url}: {what} took longer than "
-                               f"{self.settings.timeouts.action:g} s")
+            raise ActionFailed(
+                f"{v.url}: {what} took longer than {self.settings.timeouts.action:g} s"
+            )
 
     def _needs_home(self) -> bool:
         locs = self.settings.locations
@@ -348,8 +363,10 @@ class MavlinkPerformer(ActionPerformer):
         try:
             name = goal.arguments[cmd.target_arg]
         except IndexError:
-            raise ActionFailed(f"{goal.full_name} has no argument {cmd.target_arg} "
-                               f"(the target_arg of {goal.action})") from None
+            raise ActionFailed(
+                f"{goal.full_name} has no argument {cmd.target_arg} "
+                f"(the target_arg of {goal.action})"
+            ) from None
         try:
             place = locs.get(name)
         except KeyError as exc:
@@ -370,12 +387,19 @@ class MavlinkPerformer(ActionPerformer):
         actions = specialise(parsed.actions, settings, key)
         unknown = set(settings.commands) - set(actions)
         if unknown:
-            raise ConfigError(f"commands for actions not listed in actions: "
-                              f"{', '.join(sorted(unknown))}", key=f"{key}.commands")
+            raise ConfigError(
+                f"commands for actions not listed in actions: {', '.join(sorted(unknown))}",
+                key=f"{key}.commands",
+            )
         try:
-            performer = cls(context, parsed.name, actions, settings,
-                            heartbeat_period=parsed.heartbeat_period,
-                            commit_timeout=parsed.commit_timeout)
+            performer = cls(
+                context,
+                parsed.name,
+                actions,
+                settings,
+                heartbeat_period=parsed.heartbeat_period,
+                commit_timeout=parsed.commit_timeout,
+            )
         except ConfigError:
             raise
         except ValueError as exc:

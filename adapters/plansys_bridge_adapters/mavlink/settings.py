@@ -19,16 +19,40 @@ from .modes import Model
 from .telemetry import TelemetryConfig
 from .vehicle import DEFAULT_TELEMETRY_HZ
 
-SETTINGS_KEYS = frozenset({
-    "url", "double", "vehicle", "model", "commands", "locations", "cruise_altitude",
-    "arrival_radius", "altitude_tolerance", "resend_period", "feedback_period",
-    "timeouts", "telemetry", "telemetry_hz",
-})
+SETTINGS_KEYS = frozenset(
+    {
+        "url",
+        "double",
+        "vehicle",
+        "model",
+        "commands",
+        "locations",
+        "cruise_altitude",
+        "arrival_radius",
+        "altitude_tolerance",
+        "resend_period",
+        "feedback_period",
+        "timeouts",
+        "telemetry",
+        "telemetry_hz",
+    }
+)
 DOES = ("takeoff", "goto", "land", "rtl", "hold")
 _COMMAND_KEYS = frozenset({"do", "vehicle_arg", "target_arg", "altitude", "seconds"})
-_DOUBLE_KEYS = frozenset({"model", "speedup", "transport", "ekf_delay", "home", "disarm_delay",
-                          "cruise_speed", "battery_failsafe_pct", "battery_capacity_s",
-                          "position_modes_need_ekf"})
+_DOUBLE_KEYS = frozenset(
+    {
+        "model",
+        "speedup",
+        "transport",
+        "ekf_delay",
+        "home",
+        "disarm_delay",
+        "cruise_speed",
+        "battery_failsafe_pct",
+        "battery_capacity_s",
+        "position_modes_need_ekf",
+    }
+)
 _TIMEOUT_KEYS = frozenset({"connect", "heartbeat", "command", "ekf", "arm", "action"})
 
 
@@ -87,8 +111,9 @@ def default_command(action: str) -> Command:
     return Command("goto")
 
 
-def specialise(actions: Mapping[str, tuple[str, ...]], settings: MavlinkSettings,
-               key: str) -> dict[str, tuple[str, ...]]:
+def specialise(
+    actions: Mapping[str, tuple[str, ...]], settings: MavlinkSettings, key: str
+) -> dict[str, tuple[str, ...]]:
     """Put the vehicle's PDDL name at each command's ``vehicle_arg`` position."""
     out: dict[str, tuple[str, ...]] = {}
     for action, spec in actions.items():
@@ -100,7 +125,9 @@ def specialise(actions: Mapping[str, tuple[str, ...]], settings: MavlinkSettings
             if args[i] not in ("", settings.vehicle):
                 raise ConfigError(
                     f"argument {i} is the vehicle ({settings.vehicle}) but actions.{action} "
-                    f"specialises it to {args[i]!r}", key=f"{key}.commands.{action}.vehicle_arg")
+                    f"specialises it to {args[i]!r}",
+                    key=f"{key}.commands.{action}.vehicle_arg",
+                )
             args[i] = settings.vehicle
         out[action] = tuple(args)
     return out
@@ -111,17 +138,22 @@ def parse_settings(raw: Mapping[str, Any], name: str, base_dir: Path, key: str) 
     values: dict[str, Any] = {}
     vehicle = raw.get("vehicle", name)
     if not isinstance(vehicle, str) or not vehicle.strip():
-        raise ConfigError(f"must be the vehicle's PDDL object name, got {vehicle!r}",
-                          key=f"{key}.vehicle")
+        raise ConfigError(
+            f"must be the vehicle's PDDL object name, got {vehicle!r}", key=f"{key}.vehicle"
+        )
     values["vehicle"] = vehicle.strip().lower()
     url, double = raw.get("url"), raw.get("double")
     if (url is None) == (double is None):
-        raise ConfigError("give exactly one of url (tcp:HOST:PORT, udpin:..., serial:...) "
-                          "and double ({model: copter})", key=f"{key}.url")
+        raise ConfigError(
+            "give exactly one of url (tcp:HOST:PORT, udpin:..., serial:...) "
+            "and double ({model: copter})",
+            key=f"{key}.url",
+        )
     if url is not None:
         if not isinstance(url, str) or not url.strip():
-            raise ConfigError(f"must be a MAVLink URL like tcp:127.0.0.1:5760, got {url!r}",
-                              key=f"{key}.url")
+            raise ConfigError(
+                f"must be a MAVLink URL like tcp:127.0.0.1:5760, got {url!r}", key=f"{key}.url"
+            )
         values["url"] = url.strip()
     if double is not None:
         values["double"] = _double(double, f"{key}.double")
@@ -133,29 +165,42 @@ def parse_settings(raw: Mapping[str, Any], name: str, base_dir: Path, key: str) 
     commands = raw.get("commands") or {}
     if not isinstance(commands, Mapping):
         raise ConfigError("must map action names to {do: ...}", key=f"{key}.commands")
-    values["commands"] = {str(a).lower(): _command(c, f"{key}.commands.{a}")
-                          for a, c in commands.items()}
+    values["commands"] = {
+        str(a).lower(): _command(c, f"{key}.commands.{a}") for a, c in commands.items()
+    }
     if raw.get("locations") is not None:
         spec = raw["locations"]
         if not isinstance(spec, str | Mapping):
             raise ConfigError("must be a file name or a mapping", key=f"{key}.locations")
         values["locations"] = load_locations(spec, base_dir, f"{key}.locations")
-    for name_ in ("cruise_altitude", "arrival_radius", "altitude_tolerance", "resend_period",
-                  "feedback_period"):
+    for name_ in (
+        "cruise_altitude",
+        "arrival_radius",
+        "altitude_tolerance",
+        "resend_period",
+        "feedback_period",
+    ):
         if name_ in raw:
             values[name_] = positive(raw[name_], f"{key}.{name_}")
-    timeouts = mapping(raw.get("timeouts") or {}, f"{key}.timeouts", _TIMEOUT_KEYS,
-                       "must be a mapping of seconds, e.g. {ekf: 120}")
-    values["timeouts"] = Timeouts(**{t: positive(v, f"{key}.timeouts.{t}")
-                                     for t, v in timeouts.items()})
+    timeouts = mapping(
+        raw.get("timeouts") or {},
+        f"{key}.timeouts",
+        _TIMEOUT_KEYS,
+        "must be a mapping of seconds, e.g. {ekf: 120}",
+    )
+    values["timeouts"] = Timeouts(
+        **{t: positive(v, f"{key}.timeouts.{t}") for t, v in timeouts.items()}
+    )
     values["telemetry"] = TelemetryConfig.from_mapping(raw.get("telemetry"), f"{key}.telemetry")
     if raw.get("telemetry_hz") is not None:
         hz = raw["telemetry_hz"]
         if not isinstance(hz, Mapping):
-            raise ConfigError("must map MAVLink message names to rates in Hz",
-                              key=f"{key}.telemetry_hz")
-        values["telemetry_hz"] = {str(m).upper(): positive(r, f"{key}.telemetry_hz.{m}")
-                                  for m, r in hz.items()}
+            raise ConfigError(
+                "must map MAVLink message names to rates in Hz", key=f"{key}.telemetry_hz"
+            )
+        values["telemetry_hz"] = {
+            str(m).upper(): positive(r, f"{key}.telemetry_hz.{m}") for m, r in hz.items()
+        }
     return MavlinkSettings(**values)
 
 
@@ -171,8 +216,9 @@ def _command(value: object, key: str) -> Command:
         if k in value:
             v = value[k]
             if isinstance(v, bool) or not isinstance(v, int) or (k == "vehicle_arg" and v < 0):
-                raise ConfigError(f"must be an argument position (0 = first), got {v!r}",
-                                  key=f"{key}.{k}")
+                raise ConfigError(
+                    f"must be an argument position (0 = first), got {v!r}", key=f"{key}.{k}"
+                )
             fields[k] = v
     for k in ("altitude", "seconds"):
         if k in value:
@@ -193,4 +239,3 @@ def _double(value: object, key: str) -> dict[str, Any]:
         if not isinstance(home, Mapping) or "lat" not in home or "lon" not in home:
             raise ConfigError("must be {lat: .., lon: .., alt: ..}", key=f"{key}.home")
     return out
-

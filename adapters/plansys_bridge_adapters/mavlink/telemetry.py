@@ -35,8 +35,13 @@ class KnowledgeSink(Protocol):
     def exist_predicate(self, fact: Any) -> bool: ...
 
 
-_KEYS = ("battery_function", "low_battery_predicate", "low_battery_threshold", "hysteresis",
-         "battery_step")
+_KEYS = (
+    "battery_function",
+    "low_battery_predicate",
+    "low_battery_threshold",
+    "hysteresis",
+    "battery_step",
+)
 
 
 @dataclass(frozen=True)
@@ -66,8 +71,7 @@ class TelemetryConfig:
             if name in data:
                 value = data[name]
                 if isinstance(value, bool) or not isinstance(value, int | float) or value < 0:
-                    raise ConfigError(f"must be a number >= 0, got {value!r}",
-                                      key=f"{key}.{name}")
+                    raise ConfigError(f"must be a number >= 0, got {value!r}", key=f"{key}.{name}")
                 values[name] = float(value)
         return cls(**values)
 
@@ -75,8 +79,13 @@ class TelemetryConfig:
 class TelemetryPublisher:
     """Writes one vehicle's battery into the knowledge base as it changes."""
 
-    def __init__(self, vehicle: MavlinkVehicle, knowledge: KnowledgeSink, vehicle_object: str,
-                 config: TelemetryConfig) -> None:
+    def __init__(
+        self,
+        vehicle: MavlinkVehicle,
+        knowledge: KnowledgeSink,
+        vehicle_object: str,
+        config: TelemetryConfig,
+    ) -> None:
         self.vehicle = vehicle
         self.knowledge = knowledge
         self.obj = vehicle_object
@@ -108,8 +117,7 @@ class TelemetryPublisher:
         """Publish ``remaining`` (percent) if it moved enough or crossed the threshold."""
         cfg = self.config
         if cfg.battery_function and (
-            self.last_published is None
-            or abs(remaining - self.last_published) >= cfg.battery_step
+            self.last_published is None or abs(remaining - self.last_published) >= cfg.battery_step
         ):
             text = f"(= ({cfg.battery_function} {self.obj}) {remaining:g})"
             if self._apply("battery_function", lambda: self.knowledge.set_function(text)):
@@ -117,16 +125,21 @@ class TelemetryPublisher:
         if cfg.low_battery_predicate:
             fact = f"({cfg.low_battery_predicate} {self.obj})"
             if not self.low and remaining < cfg.low_battery_threshold:
-                if self._apply("low_battery_predicate",
-                               lambda: self.knowledge.add_predicate(fact)):
+                if self._apply("low_battery_predicate", lambda: self.knowledge.add_predicate(fact)):
                     self.low = True
-                    log.warning("%s: battery %.0f %% < %g %%: %s", self.vehicle.url, remaining,
-                                cfg.low_battery_threshold, fact)
+                    log.warning(
+                        "%s: battery %.0f %% < %g %%: %s",
+                        self.vehicle.url,
+                        remaining,
+                        cfg.low_battery_threshold,
+                        fact,
+                    )
             elif (
                 self.low
                 and remaining >= cfg.low_battery_threshold + cfg.hysteresis
-                and self._apply("low_battery_predicate",
-                                lambda: self.knowledge.remove_predicate(fact))
+                and self._apply(
+                    "low_battery_predicate", lambda: self.knowledge.remove_predicate(fact)
+                )
             ):
                 self.low = False
 
@@ -138,7 +151,11 @@ class TelemetryPublisher:
         except PlansysBridgeError as exc:
             # A domain without that function/predicate: say so once, keep flying.
             self._disabled.add(what)
-            log.error("%s: telemetry %s disabled, the knowledge refused it: %s",
-                      self.vehicle.url, what, exc)
+            log.error(
+                "%s: telemetry %s disabled, the knowledge refused it: %s",
+                self.vehicle.url,
+                what,
+                exc,
+            )
             return False
         return True

@@ -219,8 +219,9 @@ class MavlinkVehicle:
         dialect, which changes every other link in the process; this link never
         does that. MAVLink 1 frames from older vehicles still parse.
         """
-        conn.mav = mavlink2.MAVLink(conn, srcSystem=self.settings.source_system,
-                                    srcComponent=self.settings.source_component)
+        conn.mav = mavlink2.MAVLink(
+            conn, srcSystem=self.settings.source_system, srcComponent=self.settings.source_component
+        )
         conn.mav.robust_parsing = True
         conn.WIRE_PROTOCOL_VERSION = "2.0"
         conn.first_byte = False
@@ -297,8 +298,11 @@ class MavlinkVehicle:
         kind = msg.get_type()
         src_sys, src_comp = msg.get_srcSystem(), msg.get_srcComponent()
         if self.target_system == 0:
-            if (kind == "HEARTBEAT" and msg.type != MAV_TYPE_GCS
-                    and msg.autopilot != MAV_AUTOPILOT_INVALID):
+            if (
+                kind == "HEARTBEAT"
+                and msg.type != MAV_TYPE_GCS
+                and msg.autopilot != MAV_AUTOPILOT_INVALID
+            ):
                 self.target_system, self.target_component = src_sys, src_comp
                 self.model = model_of_type(msg.type)
                 if msg.autopilot != MAV_AUTOPILOT_ARDUPILOTMEGA:
@@ -500,8 +504,9 @@ class MavlinkVehicle:
     async def _gcs_heartbeat(self) -> None:
         while True:
             with contextlib.suppress(MavlinkError):
-                self._send("heartbeat_send", MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0,
-                           ML.MAV_STATE_ACTIVE)
+                self._send(
+                    "heartbeat_send", MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0, ML.MAV_STATE_ACTIVE
+                )
             await asyncio.sleep(1.0)
 
     async def command(self, command: int, *params: float, retries: int | None = None) -> None:
@@ -518,8 +523,14 @@ class MavlinkVehicle:
             fut: asyncio.Future[int] = loop.create_future()
             self._acks[command] = fut
             try:
-                self._send("command_long_send", self.target_system, self.target_component,
-                           command, attempt, *p)
+                self._send(
+                    "command_long_send",
+                    self.target_system,
+                    self.target_component,
+                    command,
+                    attempt,
+                    *p,
+                )
                 async with asyncio.timeout(self.settings.command_timeout):
                     result = await fut
                 break
@@ -537,12 +548,16 @@ class MavlinkVehicle:
                 f"({self.settings.command_timeout:g} s each)",
             )
         if result != ML.MAV_RESULT_ACCEPTED:
-            raise CommandRefused(self.url, name, _enum_name("MAV_RESULT", result),
-                                 self._texts_since(start))
+            raise CommandRefused(
+                self.url, name, _enum_name("MAV_RESULT", result), self._texts_since(start)
+            )
 
     def _texts_since(self, start: float) -> str:
-        texts = [e.text for e in self.statustexts
-                 if e.stamp >= start and e.severity <= ML.MAV_SEVERITY_WARNING]
+        texts = [
+            e.text
+            for e in self.statustexts
+            if e.stamp >= start and e.severity <= ML.MAV_SEVERITY_WARNING
+        ]
         return "; ".join(texts[-3:])
 
     async def request_telemetry(self, rates_hz: Mapping[str, float]) -> None:
@@ -558,9 +573,14 @@ class MavlinkVehicle:
                 if exc.result != "MAV_RESULT_UNSUPPORTED":
                     raise
                 # Firmware without SET_MESSAGE_INTERVAL: fall back to the old streams.
-                self._send("request_data_stream_send", self.target_system,
-                           self.target_component, ML.MAV_DATA_STREAM_ALL,
-                           max(1, round(max(rates_hz.values()))), 1)
+                self._send(
+                    "request_data_stream_send",
+                    self.target_system,
+                    self.target_component,
+                    ML.MAV_DATA_STREAM_ALL,
+                    max(1, round(max(rates_hz.values()))),
+                    1,
+                )
                 return
 
     # ------------------------------------------------------------ operations
@@ -589,14 +609,14 @@ class MavlinkVehicle:
         self._pending_mode = (old if old is not None else -1, number)
         self.expected_modes = previous | {number}
         try:
-            await self.command(ML.MAV_CMD_DO_SET_MODE, ML.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
-                               number)
+            await self.command(ML.MAV_CMD_DO_SET_MODE, ML.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, number)
         except MavlinkError:
             self._pending_mode = None
             self.expected_modes = previous
             raise
-        await self.wait_for(lambda: self.telemetry.custom_mode == number, timeout,
-                            f"mode {name.upper()}")
+        await self.wait_for(
+            lambda: self.telemetry.custom_mode == number, timeout, f"mode {name.upper()}"
+        )
         self.expected_modes = frozenset({number})
 
     def ekf_ready(self) -> bool:
@@ -624,12 +644,16 @@ class MavlinkVehicle:
                     raise
                 if loop.time() + retry_period > deadline:
                     why = self._arming_texts(start) or exc.reason
-                    raise CommandRefused(self.url, "arming", exc.result,
-                                         f"still refused after {timeout:g} s: {why}") from exc
+                    raise CommandRefused(
+                        self.url, "arming", exc.result, f"still refused after {timeout:g} s: {why}"
+                    ) from exc
                 await asyncio.sleep(retry_period)
                 continue
-            await self.wait_for(lambda: self.telemetry.armed, max(1.0, deadline - loop.time()),
-                                "a HEARTBEAT showing the vehicle armed")
+            await self.wait_for(
+                lambda: self.telemetry.armed,
+                max(1.0, deadline - loop.time()),
+                "a HEARTBEAT showing the vehicle armed",
+            )
 
     def _arming_texts(self, start: float) -> str:
         seen: list[str] = []
@@ -650,10 +674,23 @@ class MavlinkVehicle:
         """SET_POSITION_TARGET_GLOBAL_INT, relative-altitude frame, position only."""
         boot_ms = int(self._now() * 1000) & 0xFFFFFFFF
         self._send(
-            "set_position_target_global_int_send", boot_ms, self.target_system,
-            self.target_component, ML.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, POSITION_ONLY_MASK,
-            round(target.lat * 1e7), round(target.lon * 1e7), float(target.alt),
-            0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            "set_position_target_global_int_send",
+            boot_ms,
+            self.target_system,
+            self.target_component,
+            ML.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+            POSITION_ONLY_MASK,
+            round(target.lat * 1e7),
+            round(target.lon * 1e7),
+            float(target.alt),
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
         )
 
     async def wait_home(self, timeout: float) -> GeoPoint:
@@ -661,14 +698,14 @@ class MavlinkVehicle:
         if self.telemetry.home is None:
             with contextlib.suppress(CommandRefused):
                 await self.command(ML.MAV_CMD_REQUEST_MESSAGE, ML.MAVLINK_MSG_ID_HOME_POSITION)
-            await self.wait_for(lambda: self.telemetry.home is not None, timeout,
-                                "HOME_POSITION")
+            await self.wait_for(lambda: self.telemetry.home is not None, timeout, "HOME_POSITION")
         assert self.telemetry.home is not None
         return self.telemetry.home
 
     async def wait_position(self, timeout: float) -> GeoPoint:
-        await self.wait_for(lambda: self.telemetry.position is not None, timeout,
-                            "GLOBAL_POSITION_INT")
+        await self.wait_for(
+            lambda: self.telemetry.position is not None, timeout, "GLOBAL_POSITION_INT"
+        )
         assert self.telemetry.position is not None
         return self.telemetry.position
 
@@ -710,4 +747,3 @@ def _device(url: str) -> tuple[str, dict[str, Any]]:
     if not path:
         raise LinkError(url, "no serial device given")
     return path, {"baud": baud}
-

@@ -68,8 +68,9 @@ async def can_rig(
     """Base double + CAN performer on ``channel``, both started; stopped on exit."""
     await hub.start()
     bus = entry.get("bus", {"interface": "virtual", "channel": channel})
-    base = BaseDouble(hub.clock, BusConfig(interface=bus["interface"], channel=bus["channel"]),
-                      double)
+    base = BaseDouble(
+        hub.clock, BusConfig(interface=bus["interface"], channel=bus["channel"]), double
+    )
     await base.start()
     context = PerformerContext(hub=hub, clock=hub.clock, knowledge=knowledge)  # type: ignore[arg-type]
     [performer] = CanBasePerformer.from_config(base_entry(channel, **entry), context)

@@ -133,8 +133,7 @@ def test_poll_reader_sorts_frames_errors_and_garbage(channel: str) -> None:
         other = can.Bus(interface="virtual", channel=channel)
         await client.open(reader="poll")
         try:
-            other.send(can.Message(arbitration_id=0x040, is_error_frame=True, dlc=8,
-                                   data=bytes(8)))
+            other.send(can.Message(arbitration_id=0x040, is_error_frame=True, dlc=8, data=bytes(8)))
             other.send(can.Message(arbitration_id=0x200, is_extended_id=False, data=b"\x00"))
             other.send(DBC.encode(OdomPose(0.0, 0.0, 0.0)))
             await asyncio.sleep(0.05)
@@ -236,8 +235,12 @@ def test_file_descriptor_reader_turns_a_failing_socket_into_one_bus_error() -> N
 
     async def main() -> None:
         sink = Sink()
-        client = CanBusClient(BusConfig(interface="pair", channel="p0", reopen_period=0.5),
-                              DBC, sink, bus_factory=factory)
+        client = CanBusClient(
+            BusConfig(interface="pair", channel="p0", reopen_period=0.5),
+            DBC,
+            sink,
+            bus_factory=factory,
+        )
         await client.open(reader="notifier")
         try:
             buses[0].inject(DBC.encode(OdomPose(1.0, 0.0, 0.0)))
@@ -272,10 +275,14 @@ def test_unknown_interface_is_a_clear_error() -> None:
 
 
 def test_frames_are_described_for_logs() -> None:
-    assert describe_frame(can.Message(arbitration_id=0x201, is_extended_id=False,
-                                      data=b"\x01\xab")) == "0x201 [2] 01 ab"
-    assert describe_frame(can.Message(arbitration_id=0x201, is_extended_id=True,
-                                      data=b"")) == "0x00000201 [0]"
+    assert (
+        describe_frame(can.Message(arbitration_id=0x201, is_extended_id=False, data=b"\x01\xab"))
+        == "0x201 [2] 01 ab"
+    )
+    assert (
+        describe_frame(can.Message(arbitration_id=0x201, is_extended_id=True, data=b""))
+        == "0x00000201 [0]"
+    )
     assert describe_error_frame(can.Message(arbitration_id=0x0A0, is_error_frame=True)) == (
         "no ACK on transmission, bus error"
     )
@@ -301,8 +308,11 @@ def test_any_frames_only_count_or_update_the_monitor(
     client = CanBusClient(BusConfig(channel="fuzz"), DBC, monitor)
     for frame_id, data, extended, kind in frames:
         msg = can.Message(
-            arbitration_id=frame_id, is_extended_id=extended, data=data,
-            is_remote_frame=kind == "remote", is_error_frame=kind == "error",
+            arbitration_id=frame_id,
+            is_extended_id=extended,
+            data=data,
+            is_remote_frame=kind == "remote",
+            is_error_frame=kind == "error",
             dlc=len(data),
         )
         client.dispatch(msg)

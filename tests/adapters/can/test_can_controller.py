@@ -78,8 +78,9 @@ def test_reaches_goal_within_tolerance(
 
 
 def test_commands_respect_velocity_and_acceleration_limits() -> None:
-    limits = MotionLimits(max_linear=0.4, max_angular=0.8, max_linear_accel=0.3,
-                          max_angular_accel=1.0)
+    limits = MotionLimits(
+        max_linear=0.4, max_angular=0.8, max_linear_accel=0.3, max_angular_accel=1.0
+    )
     follower = PathFollower(Path([(0, 0), (2, 2), (4, 0)]), None, ControllerConfig(limits=limits))
     _, commands, arrived = drive(follower, UnicycleModel())
     assert arrived
@@ -121,7 +122,9 @@ def test_bad_limits_are_refused() -> None:
 
 @settings(max_examples=25, deadline=None)
 @given(
-    st.floats(-4, 4), st.floats(-4, 4), st.floats(-math.pi, math.pi),
+    st.floats(-4, 4),
+    st.floats(-4, 4),
+    st.floats(-math.pi, math.pi),
     st.one_of(st.none(), st.floats(-math.pi, math.pi)),
 )
 def test_reaches_any_goal(gx: float, gy: float, start_yaw: float, goal_yaw: float | None) -> None:

@@ -62,10 +62,17 @@ def test_config_copy_of_dbc_is_the_packaged_one() -> None:
 
 
 def test_ids_sizes_and_priorities(dbc: MobileBaseDbc) -> None:
-    ids = {t.__name__: dbc.frame_id(t) for t in (EStopCommand, VelocityCommand, OdomPose,
-                                                  OdomTwist, BaseStatus)}
-    assert ids == {"EStopCommand": 0x010, "VelocityCommand": 0x100, "OdomPose": 0x200,
-                   "OdomTwist": 0x201, "BaseStatus": 0x300}
+    ids = {
+        t.__name__: dbc.frame_id(t)
+        for t in (EStopCommand, VelocityCommand, OdomPose, OdomTwist, BaseStatus)
+    }
+    assert ids == {
+        "EStopCommand": 0x010,
+        "VelocityCommand": 0x100,
+        "OdomPose": 0x200,
+        "OdomTwist": 0x201,
+        "BaseStatus": 0x300,
+    }
     # The e-stop wins arbitration against everything else.
     assert ids["EStopCommand"] == min(ids.values())
     for t in (EStopCommand, VelocityCommand, OdomPose, OdomTwist, BaseStatus):
@@ -88,23 +95,25 @@ def test_typed_frames_match_cantools_in_both_directions(
     assert dbc.decode(msg) == frame
 
 
-def test_signal_values_are_where_the_dbc_says(raw_db: cantools.database.can.Database,
-                                              dbc: MobileBaseDbc) -> None:
+def test_signal_values_are_where_the_dbc_says(
+    raw_db: cantools.database.can.Database, dbc: MobileBaseDbc
+) -> None:
     message = raw_db.get_message_by_name("BASE_VelocityCmd")
-    data = message.encode({"CmdLinear": 1.5, "CmdAngular": -0.75, "CmdEnable": 1,
-                           "CmdCounter": 9})
+    data = message.encode({"CmdLinear": 1.5, "CmdAngular": -0.75, "CmdEnable": 1, "CmdCounter": 9})
     # int16 little-endian at 1 mm/s and 1 mrad/s resolution.
     assert data[:2] == (1500).to_bytes(2, "little", signed=True)
     assert data[2:4] == (-750).to_bytes(2, "little", signed=True)
-    assert dbc.decode(can.Message(arbitration_id=0x100, is_extended_id=False, data=data)) == \
-        VelocityCommand(1.5, -0.75, True, 9)
+    assert dbc.decode(
+        can.Message(arbitration_id=0x100, is_extended_id=False, data=data)
+    ) == VelocityCommand(1.5, -0.75, True, 9)
 
 
 def test_status_state_value_table(raw_db: cantools.database.can.Database) -> None:
     signal = raw_db.get_message_by_name("BASE_Status").get_signal_by_name("BaseState")
     assert signal.choices is not None
-    assert {int(k): str(v) for k, v in signal.choices.items()} == {s.value: s.name
-                                                                   for s in BaseState}
+    assert {int(k): str(v) for k, v in signal.choices.items()} == {
+        s.value: s.name for s in BaseState
+    }
 
 
 def test_yaw_is_normalised_before_encoding(dbc: MobileBaseDbc) -> None:
@@ -124,8 +133,13 @@ def test_out_of_range_command_is_refused(dbc: MobileBaseDbc) -> None:
 
 
 def _std(frame_id: int, data: bytes = b"", *, remote: bool = False) -> can.Message:
-    return can.Message(arbitration_id=frame_id, is_extended_id=False, data=data,
-                       is_remote_frame=remote, dlc=8 if remote else None)
+    return can.Message(
+        arbitration_id=frame_id,
+        is_extended_id=False,
+        data=data,
+        is_remote_frame=remote,
+        dlc=8 if remote else None,
+    )
 
 
 @pytest.mark.parametrize(
@@ -141,8 +155,7 @@ def _std(frame_id: int, data: bytes = b"", *, remote: bool = False) -> can.Messa
         (_std(0x100, (6000).to_bytes(2, "little") + bytes(3)), "out_of_range"),
     ],
 )
-def test_malformed_frames_are_classified(msg: can.Message, kind: str,
-                                         dbc: MobileBaseDbc) -> None:
+def test_malformed_frames_are_classified(msg: can.Message, kind: str, dbc: MobileBaseDbc) -> None:
     with pytest.raises(MalformedFrame) as info:
         dbc.decode(msg)
     assert info.value.kind == kind
@@ -176,20 +189,39 @@ def test_dbc_with_other_ids_but_same_names_works(tmp_path: Path) -> None:
 def _scaled(lo: float, hi: float, scale: float) -> st.SearchStrategy[float]:
     """Values on the signal's grid within its DBC range."""
     return st.integers(math.ceil(lo / scale - 1e-9), math.floor(hi / scale + 1e-9)).map(
-        lambda raw: round(raw * scale, 6))
+        lambda raw: round(raw * scale, 6)
+    )
 
 
 FRAMES = st.one_of(
-    st.builds(VelocityCommand, _scaled(-5, 5, 0.001), _scaled(-10, 10, 0.001), st.booleans(),
-              st.integers(0, 15)),
+    st.builds(
+        VelocityCommand,
+        _scaled(-5, 5, 0.001),
+        _scaled(-10, 10, 0.001),
+        st.booleans(),
+        st.integers(0, 15),
+    ),
     st.builds(EStopCommand, st.booleans(), st.integers(0, 15)),
-    st.builds(OdomPose, _scaled(-8388.608, 8388.607, 0.001), _scaled(-8388.608, 8388.607, 0.001),
-              _scaled(-3.1415, 3.1415, 0.0001)),
-    st.builds(OdomTwist, _scaled(-32.768, 32.767, 0.001), _scaled(-32.768, 32.767, 0.001),
-              st.integers(0, 255)),
-    st.builds(BaseStatus, _scaled(0, 100, 0.5), _scaled(0, 40.95, 0.01),
-              st.builds(FaultBits, st.booleans(), st.booleans(), st.booleans(), st.booleans()),
-              st.sampled_from(BaseState), st.integers(0, 255)),
+    st.builds(
+        OdomPose,
+        _scaled(-8388.608, 8388.607, 0.001),
+        _scaled(-8388.608, 8388.607, 0.001),
+        _scaled(-3.1415, 3.1415, 0.0001),
+    ),
+    st.builds(
+        OdomTwist,
+        _scaled(-32.768, 32.767, 0.001),
+        _scaled(-32.768, 32.767, 0.001),
+        st.integers(0, 255),
+    ),
+    st.builds(
+        BaseStatus,
+        _scaled(0, 100, 0.5),
+        _scaled(0, 40.95, 0.01),
+        st.builds(FaultBits, st.booleans(), st.booleans(), st.booleans(), st.booleans()),
+        st.sampled_from(BaseState),
+        st.integers(0, 255),
+    ),
 )
 
 
@@ -216,13 +248,15 @@ def test_round_trip_over_signal_ranges(frame: object) -> None:
 
 
 @settings(max_examples=300, deadline=None)
-@given(st.sampled_from([0x010, 0x100, 0x200, 0x201, 0x300, 0x123, 0x7FF]), st.binary(max_size=8),
-       st.booleans())
+@given(
+    st.sampled_from([0x010, 0x100, 0x200, 0x201, 0x300, 0x123, 0x7FF]),
+    st.binary(max_size=8),
+    st.booleans(),
+)
 def test_any_bytes_decode_or_raise_malformed(frame_id: int, data: bytes, extended: bool) -> None:
     dbc = _DBC
     try:
-        frame = dbc.decode(can.Message(arbitration_id=frame_id, is_extended_id=extended,
-                                       data=data))
+        frame = dbc.decode(can.Message(arbitration_id=frame_id, is_extended_id=extended, data=data))
     except MalformedFrame:
         return
     # Whatever decodes re-encodes to the same bytes (unused bits aside).

@@ -59,15 +59,17 @@ class Driver:
         self.client = client
         self.counter = 0
 
-    def velocity(self, linear: float, angular: float, enable: bool = True,
-                 counter: int | None = None) -> None:
+    def velocity(
+        self, linear: float, angular: float, enable: bool = True, counter: int | None = None
+    ) -> None:
         if counter is None:
             self.counter = (self.counter + 1) % 16
             counter = self.counter
         self.client.send_frame(VelocityCommand(linear, angular, enable, counter))
 
-    async def hold(self, clock: VirtualClock, seconds: float, linear: float, angular: float,
-                   rate: float = 20.0) -> None:
+    async def hold(
+        self, clock: VirtualClock, seconds: float, linear: float, angular: float, rate: float = 20.0
+    ) -> None:
         for _ in range(round(seconds * rate)):
             self.velocity(linear, angular)
             await clock.sleep(1 / rate)
@@ -98,7 +100,9 @@ def test_drives_with_acceleration_limits_and_reports_odometry(channel: str) -> N
 
     async def scenario(clock: VirtualClock) -> None:
         async with base_and_driver(clock, channel, BaseDoubleConfig(limits=limits)) as (
-            base, driver, rec
+            base,
+            driver,
+            rec,
         ):
             await driver.hold(clock, 3.0, 0.5, 0.0)
             twists = [f for _, f in rec.of(OdomTwist)]
@@ -210,8 +214,9 @@ def test_drive_fault_brakes_and_is_reported(channel: str, fault: str) -> None:
 
 def test_battery_drains_faster_when_driving(channel: str) -> None:
     async def scenario(clock: VirtualClock) -> None:
-        config = BaseDoubleConfig(battery_percent=50.0, battery_drain_idle=0.1,
-                                  battery_drain_per_metre=2.0)
+        config = BaseDoubleConfig(
+            battery_percent=50.0, battery_drain_idle=0.1, battery_drain_per_metre=2.0
+        )
         async with base_and_driver(clock, channel, config) as (base, driver, rec):
             await clock.sleep(10.0)
             idle = 50.0 - base.battery
@@ -254,8 +259,7 @@ def test_error_and_garbage_frames_reach_the_bus(channel: str) -> None:
             assert len(rec.error_frames) == 2
             counters = driver.client.counters
             assert counters.malformed_total == len(sent) == 25
-            assert set(counters.malformed) == {"unknown_id", "bad_dlc", "remote",
-                                               "out_of_range"}
+            assert set(counters.malformed) == {"unknown_id", "bad_dlc", "remote", "out_of_range"}
             assert rec.bus_errors == []
 
     run_virtual(scenario)
@@ -278,8 +282,9 @@ def test_command_line_double_serves_a_bus(channel: str, capsys: pytest.CaptureFi
     results: list[int] = []
     thread = threading.Thread(
         target=lambda: results.append(
-            main(["--interface", "virtual", "--channel", channel, "--x", "1.5",
-                  "--duration", "0.3"])
+            main(
+                ["--interface", "virtual", "--channel", channel, "--x", "1.5", "--duration", "0.3"]
+            )
         ),
         name="can-double-cli",
     )

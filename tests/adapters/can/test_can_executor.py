@@ -63,7 +63,9 @@ def execute(mission: Mission, hub: Hub, body: Body, **options: Any) -> Execution
             for p in mission.config.performers
         ]
         context = PerformerContext(
-            hub=hub, clock=hub.clock, knowledge=mission.knowledge,
+            hub=hub,
+            clock=hub.clock,
+            knowledge=mission.knowledge,
             base_dir=mission.config.base_dir,
         )
         performers = performers_from_config(entries, context)
@@ -73,8 +75,9 @@ def execute(mission: Mission, hub: Hub, body: Body, **options: Any) -> Execution
                 assert isinstance(performer, CanBasePerformer)
                 await performer.start()
                 started[performer.robot] = performer
-            executor = Executor(hub, mission.domain, mission.knowledge, None,
-                                ExecutorOptions(**options))
+            executor = Executor(
+                hub, mission.domain, mission.knowledge, None, ExecutorOptions(**options)
+            )
             return await body(executor, started)
         finally:
             for performer in started.values():
@@ -98,8 +101,11 @@ def test_mission_plan_drives_both_bases_in_parallel(hub: Hub) -> None:
         return await executor.execute(plan, goal=mission.knowledge.get_goal())
 
     result = execute(mission, hub, body, max_replans=0)
-    assert result.success, (result.status, result.message,
-                            [(a.text, a.message) for a in result.actions])
+    assert result.success, (
+        result.status,
+        result.message,
+        [(a.text, a.message) for a in result.actions],
+    )
     assert mission.knowledge.is_goal_satisfied()
     assert {a.performer for a in result.actions} == {"base_r2d2", "base_bb8"}
     assert all(a.message.startswith("arrived at ") for a in result.actions)
@@ -149,10 +155,15 @@ def test_low_battery_frame_halts_the_move_through_the_knowledge(hub: Hub) -> Non
     result = execute(mission, hub, body, max_replans=0)
     assert not result.success
     assert mission.knowledge.exist_predicate("(battery_low bb8)")
-    halted = [a for a in result.actions if a.status == ActionStatus.FAILED
-              and "over all requirement (not (battery_low bb8)) no longer holds" in a.message]
+    halted = [
+        a
+        for a in result.actions
+        if a.status == ActionStatus.FAILED
+        and "over all requirement (not (battery_low bb8)) no longer holds" in a.message
+    ]
     assert len(halted) == 1, "\n".join(
-        f"{a.text} {a.status.name} {a.message}" for a in result.actions)
+        f"{a.text} {a.status.name} {a.message}" for a in result.actions
+    )
     assert stops == [False]  # the halted move was cancelled on the base, which stopped
 
 
@@ -164,8 +175,9 @@ def test_mission_runner_records_the_bases_odometry(tmp_path: Path) -> None:
     with AnyReader([bag]) as reader:
         conns = [c for c in reader.connections if c.topic == "/r2d2/pose"]
         assert conns and conns[0].msgtype == "geometry_msgs/msg/PoseStamped"
-        poses: list[Any] = [reader.deserialize(raw, conns[0].msgtype)
-                            for _, _, raw in reader.messages(conns)]
+        poses: list[Any] = [
+            reader.deserialize(raw, conns[0].msgtype) for _, _, raw in reader.messages(conns)
+        ]
     # 10 poses per mission second over a run of about 25 s, ending back at the dock.
     assert len(poses) > 150
     last = poses[-1]

@@ -36,19 +36,20 @@ def play(hub: Hub, channel: str, scenario: Scenario, **rig_kw: Any) -> None:
     run(main(), hub.clock)
 
 
-async def move(rig: Rig, destination: str, feedback: list[tuple[float, str]] | None = None,
-               robot: str = "r2d2") -> ActionOutcome:
-    client = ActionClient(rig.hub, "move", [robot, "somewhere", destination],
-                          policy=AuctionPolicy(give_up_after=3.0))
+async def move(
+    rig: Rig, destination: str, feedback: list[tuple[float, str]] | None = None, robot: str = "r2d2"
+) -> ActionOutcome:
+    client = ActionClient(
+        rig.hub, "move", [robot, "somewhere", destination], policy=AuctionPolicy(give_up_after=3.0)
+    )
     return await client.run(
         (lambda completion, status: feedback.append((completion, status)))
-        if feedback is not None else None
+        if feedback is not None
+        else None
     )
 
 
-async def moving(
-    rig: Rig, seconds: float
-) -> tuple[ActionClient, asyncio.Task[ActionOutcome]]:
+async def moving(rig: Rig, seconds: float) -> tuple[ActionClient, asyncio.Task[ActionOutcome]]:
     """Start ``(move r2d2 dock kitchen)`` and let it drive for ``seconds``."""
     client = ActionClient(rig.hub, "move", ["r2d2", "dock", "kitchen"])
     task = asyncio.get_running_loop().create_task(client.run())
@@ -165,19 +166,18 @@ FAULTS: dict[str, tuple[Callable[[Rig], None], str]] = {
     "silence": (lambda rig: rig.double.silence(), "base silent on virtual:can-test-"),
     "frozen heartbeat": (lambda rig: rig.double.freeze_heartbeat(), "none with a new counter"),
     "motor fault": (lambda rig: rig.double.set_faults(motor=True), "base fault: motor fault"),
-    "overcurrent": (lambda rig: rig.double.set_faults(overcurrent=True),
-                    "base fault: overcurrent"),
+    "overcurrent": (lambda rig: rig.double.set_faults(overcurrent=True), "base fault: overcurrent"),
     "e-stop button": (lambda rig: rig.double.press_estop(), "base e-stop active"),
-    "error frames": (lambda rig: rig.double.send_error_frames(1),
-                     "CAN bus error on virtual:can-test-"),
+    "error frames": (
+        lambda rig: rig.double.send_error_frames(1),
+        "CAN bus error on virtual:can-test-",
+    ),
     "interface gone": (lambda rig: _shutdown(rig), "CAN bus error"),
 }
 
 
 @pytest.mark.parametrize("fault", sorted(FAULTS))
-def test_every_fault_ends_the_action_and_stops_the_base(
-    hub: Hub, channel: str, fault: str
-) -> None:
+def test_every_fault_ends_the_action_and_stops_the_base(hub: Hub, channel: str, fault: str) -> None:
     inject, expected = FAULTS[fault]
 
     async def scenario(rig: Rig) -> None:
@@ -209,8 +209,13 @@ def test_watchdog_trip_ends_the_action(hub: Hub, channel: str) -> None:
         assert rig.double.counters.watchdog_trips >= 1
 
     # Commands every 0.5 s against a 0.3 s watchdog: the base stops between commands.
-    play(hub, channel, scenario, double=BaseDoubleConfig(watchdog_timeout=0.3),
-         safety={"command_rate": 2.0})
+    play(
+        hub,
+        channel,
+        scenario,
+        double=BaseDoubleConfig(watchdog_timeout=0.3),
+        safety={"command_rate": 2.0},
+    )
 
 
 def test_blocked_base_is_reported_as_stalled(hub: Hub, channel: str) -> None:
@@ -309,9 +314,14 @@ def test_battery_goes_into_the_knowledge(hub: Hub, channel: str) -> None:
         await settle(rig, 0.3)
         assert not knowledge.exist_predicate("(battery_low r2d2)")
 
-    play(hub, channel, scenario, knowledge=knowledge,
-         double=BaseDoubleConfig(battery_percent=80.0),
-         battery={"function": "battery", "low_predicate": "battery_low", "low_below": 20})
+    play(
+        hub,
+        channel,
+        scenario,
+        knowledge=knowledge,
+        double=BaseDoubleConfig(battery_percent=80.0),
+        battery={"function": "battery", "low_predicate": "battery_low", "low_below": 20},
+    )
 
 
 def test_knowledge_refusing_the_battery_is_logged_not_fatal(
@@ -353,8 +363,10 @@ def test_simulated_base_from_the_config(hub: Hub, channel: str) -> None:
     [
         ({"robot": None}, "performer.robot"),
         ({"actions": {"move": {"robot": 0}}}, "performer.actions.move.destination"),
-        ({"actions": {"move": {"robot": 0, "destination": 2, "via": 1}}},
-         "performer.actions.move.via"),
+        (
+            {"actions": {"move": {"robot": 0, "destination": 2, "via": 1}}},
+            "performer.actions.move.via",
+        ),
         ({"locations": {"a": [1]}}, "performer.locations.a"),
         ({"locations": {"a": {"x": 1}}}, "performer.locations.a.y"),
         ({"bus": {"interface": "virtual", "chanel": "x"}}, "performer.bus.chanel"),
@@ -365,14 +377,17 @@ def test_simulated_base_from_the_config(hub: Hub, channel: str) -> None:
         ({"controller": {"max_linear": -1}}, "performer.controller.max_linear"),
         ({"controller": {"lookahed": 1}}, "performer.controller.lookahed"),
         ({"battery": {"function": 3}}, "performer.battery.function"),
-        ({"simulate_base": {"x": 0}, "bus": {"interface": "socketcan", "channel": "can0"}},
-         "performer.simulate_base"),
+        (
+            {"simulate_base": {"x": 0}, "bus": {"interface": "socketcan", "channel": "can0"}},
+            "performer.simulate_base",
+        ),
         ({"colour": "red"}, "performer.colour"),
         ({"dbc": "missing.dbc"}, "performer.dbc"),
     ],
 )
-def test_config_errors_name_the_key(hub: Hub, channel: str, change: dict[str, Any],
-                                    key: str) -> None:
+def test_config_errors_name_the_key(
+    hub: Hub, channel: str, change: dict[str, Any], key: str
+) -> None:
     entry = base_entry(channel, **change)
     entry = {k: v for k, v in entry.items() if v is not None}
     with pytest.raises(ConfigError) as info:
@@ -403,9 +418,13 @@ def test_move_on_a_scaled_wall_clock_with_the_notifier_reader(channel: str) -> N
         assert math.hypot(rig.double.model.x - 1.0, rig.double.model.y) <= 0.05
 
     # Generous timeouts: a loaded test machine must not fake a lost heartbeat.
-    play(hub, channel, scenario,
-         safety={"heartbeat_timeout": 2.0, "odometry_timeout": 2.0, "startup_timeout": 5.0},
-         bus={"interface": "virtual", "channel": channel, "reader": "notifier"})
+    play(
+        hub,
+        channel,
+        scenario,
+        safety={"heartbeat_timeout": 2.0, "odometry_timeout": 2.0, "startup_timeout": 5.0},
+        bus={"interface": "virtual", "channel": channel, "reader": "notifier"},
+    )
 
 
 def test_bid_is_the_distance_to_the_destination(hub: Hub, channel: str) -> None:

@@ -27,8 +27,10 @@ from plansys_bridge.hub.transport import InProcessTransport
 INTERFACE = os.environ.get("PLANSYS_BRIDGE_SOCKETCAN", "")
 
 
-@pytest.mark.skipif(not INTERFACE, reason="set PLANSYS_BRIDGE_SOCKETCAN to a SocketCAN "
-                    "interface that is up (e.g. vcan0)")
+@pytest.mark.skipif(
+    not INTERFACE,
+    reason="set PLANSYS_BRIDGE_SOCKETCAN to a SocketCAN interface that is up (e.g. vcan0)",
+)
 def test_move_and_fault_on_socketcan() -> None:
     hub = Hub(InProcessTransport(), WallClock(time_scale=0.5))
 

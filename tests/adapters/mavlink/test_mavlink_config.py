@@ -45,8 +45,13 @@ def test_vehicle_argument_is_specialised() -> None:
 
 
 def test_actions_without_commands_do_what_their_name_says() -> None:
-    performer = build(entry(commands=None, actions={"takeoff": ["uav1"], "goto_wp": ["uav1"],
-                                                    "return_to_launch": []}), make_hub())
+    performer = build(
+        entry(
+            commands=None,
+            actions={"takeoff": ["uav1"], "goto_wp": ["uav1"], "return_to_launch": []},
+        ),
+        make_hub(),
+    )
     assert performer.commands["takeoff"].do == "takeoff"
     assert performer.commands["goto_wp"].do == "goto"
     assert performer.commands["goto_wp"].target_arg == -1
@@ -62,26 +67,50 @@ def test_actions_without_commands_do_what_their_name_says() -> None:
         ({"url": 5760}, "performers[0].url", "must be a MAVLink URL"),
         ({"colour": "red"}, "performers[0].colour", "unknown key"),
         ({"model": "plane"}, "performers[0].model", "copter or rover"),
-        ({"commands": {"fly": {"do": "teleport"}}}, "performers[0].commands.fly.do",
-         "must be one of"),
-        ({"commands": {"fly": {"do": "goto", "target": 2}}},
-         "performers[0].commands.fly.target", "unknown key"),
-        ({"commands": {"fly": {"do": "goto", "vehicle_arg": -1}}},
-         "performers[0].commands.fly.vehicle_arg", "argument position"),
+        (
+            {"commands": {"fly": {"do": "teleport"}}},
+            "performers[0].commands.fly.do",
+            "must be one of",
+        ),
+        (
+            {"commands": {"fly": {"do": "goto", "target": 2}}},
+            "performers[0].commands.fly.target",
+            "unknown key",
+        ),
+        (
+            {"commands": {"fly": {"do": "goto", "vehicle_arg": -1}}},
+            "performers[0].commands.fly.vehicle_arg",
+            "argument position",
+        ),
         ({"commands": {"swim": "goto"}}, "performers[0].commands", "not listed in actions"),
-        ({"actions": {"fly": ["uav2"]}, "commands": {"fly": {"do": "goto", "vehicle_arg": 0}}},
-         "performers[0].commands.fly.vehicle_arg", "specialises it to 'uav2'"),
+        (
+            {"actions": {"fly": ["uav2"]}, "commands": {"fly": {"do": "goto", "vehicle_arg": 0}}},
+            "performers[0].commands.fly.vehicle_arg",
+            "specialises it to 'uav2'",
+        ),
         ({"timeouts": {"ekf": 0}}, "performers[0].timeouts.ekf", "number > 0"),
         ({"timeouts": {"boot": 3}}, "performers[0].timeouts.boot", "unknown key"),
         ({"telemetry": {"battery": "b"}}, "performers[0].telemetry.battery", "unknown key"),
-        ({"telemetry": {"low_battery_threshold": -1}},
-         "performers[0].telemetry.low_battery_threshold", ">= 0"),
-        ({"locations": {"locations": {"a": {"north": "far"}}}},
-         "performers[0].locations.locations.a.north", "must be a number"),
-        ({"url": None, "double": {"model": "copter", "speed": 3}},
-         "performers[0].double.speed", "unknown key"),
-        ({"url": None, "double": {"model": "copter", "speedup": -3}},
-         "performers[0].double.speedup", "number > 0"),
+        (
+            {"telemetry": {"low_battery_threshold": -1}},
+            "performers[0].telemetry.low_battery_threshold",
+            ">= 0",
+        ),
+        (
+            {"locations": {"locations": {"a": {"north": "far"}}}},
+            "performers[0].locations.locations.a.north",
+            "must be a number",
+        ),
+        (
+            {"url": None, "double": {"model": "copter", "speed": 3}},
+            "performers[0].double.speed",
+            "unknown key",
+        ),
+        (
+            {"url": None, "double": {"model": "copter", "speedup": -3}},
+            "performers[0].double.speedup",
+            "number > 0",
+        ),
         ({"cruise_altitude": "high"}, "performers[0].cruise_altitude", "number > 0"),
     ],
 )
@@ -99,8 +128,9 @@ def test_virtual_clock_is_refused() -> None:
     assert info.value.key == "clock.kind"
 
 
-@pytest.mark.parametrize("name", ["mavlink_copter.yaml", "mavlink_rover.yaml",
-                                  "mavlink_fleet.yaml"])
+@pytest.mark.parametrize(
+    "name", ["mavlink_copter.yaml", "mavlink_rover.yaml", "mavlink_fleet.yaml"]
+)
 def test_shipped_missions_build_their_performers(name: str) -> None:
     mission = load_mission(CONFIGS / name)
     raw = yaml.safe_load((CONFIGS / name).read_text())
@@ -111,8 +141,9 @@ def test_shipped_missions_build_their_performers(name: str) -> None:
         context = PerformerContext(hub=hub, clock=hub.clock, base_dir=mission.base_dir)
         built: list[MavlinkPerformer] = []
         for i, p in enumerate(mission.performers):
-            [performer] = MavlinkPerformer.from_config(p.model_dump(), context,
-                                                       key=f"performers[{i}]")
+            [performer] = MavlinkPerformer.from_config(
+                p.model_dump(), context, key=f"performers[{i}]"
+            )
             assert isinstance(performer, MavlinkPerformer)
             built.append(performer)
         return built

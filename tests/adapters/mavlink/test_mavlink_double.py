@@ -94,15 +94,21 @@ def test_telemetry_only_when_requested() -> None:
             kinds = {m.get_type() for m in client.pump(0.3)}
             assert "HEARTBEAT" in kinds
             assert not kinds & {"GLOBAL_POSITION_INT", "SYS_STATUS", "EKF_STATUS_REPORT"}
-            assert client.command(
-                ml.MAV_CMD_SET_MESSAGE_INTERVAL, ml.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 100_000
-            ) == ml.MAV_RESULT_ACCEPTED
+            assert (
+                client.command(
+                    ml.MAV_CMD_SET_MESSAGE_INTERVAL, ml.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 100_000
+                )
+                == ml.MAV_RESULT_ACCEPTED
+            )
             kinds = {m.get_type() for m in client.pump(0.3)}
             assert "GLOBAL_POSITION_INT" in kinds
             assert "SYS_STATUS" not in kinds
-            assert client.command(
-                ml.MAV_CMD_SET_MESSAGE_INTERVAL, ml.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, -1
-            ) == ml.MAV_RESULT_ACCEPTED
+            assert (
+                client.command(
+                    ml.MAV_CMD_SET_MESSAGE_INTERVAL, ml.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, -1
+                )
+                == ml.MAV_RESULT_ACCEPTED
+            )
             client.pump(0.05)
             assert "GLOBAL_POSITION_INT" not in {m.get_type() for m in client.pump(0.3)}
         finally:
@@ -113,22 +119,35 @@ def test_arming_refused_until_ekf_then_auto_disarm() -> None:
     with VehicleDouble("copter", speedup=50, ekf_delay=20.0) as double:
         client = RawClient(double.url)
         try:
-            assert client.command(ml.MAV_CMD_SET_MESSAGE_INTERVAL,
-                                  ml.MAVLINK_MSG_ID_EKF_STATUS_REPORT, 200_000) == 0
+            assert (
+                client.command(
+                    ml.MAV_CMD_SET_MESSAGE_INTERVAL, ml.MAVLINK_MSG_ID_EKF_STATUS_REPORT, 200_000
+                )
+                == 0
+            )
             client.until(lambda m: m.get_type() == "HEARTBEAT")
             assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, COPTER_MODES["GUIDED"]) == 0
             assert client.command(ml.MAV_CMD_COMPONENT_ARM_DISARM, 1) == ml.MAV_RESULT_FAILED
             texts = [m.text for m in client.seen if m.get_type() == "STATUSTEXT"]
             assert "PreArm: Need Position Estimate" in texts
-            ekf = client.until(lambda m: m.get_type() == "EKF_STATUS_REPORT"
-                               and m.flags & ml.EKF_POS_HORIZ_ABS, seconds=3)
+            ekf = client.until(
+                lambda m: m.get_type() == "EKF_STATUS_REPORT" and m.flags & ml.EKF_POS_HORIZ_ABS,
+                seconds=3,
+            )
             assert not ekf.flags & ml.EKF_CONST_POS_MODE
             assert client.command(ml.MAV_CMD_COMPONENT_ARM_DISARM, 1) == ml.MAV_RESULT_ACCEPTED
-            client.until(lambda m: m.get_type() == "HEARTBEAT"
-                         and m.base_mode & ml.MAV_MODE_FLAG_SAFETY_ARMED)
+            client.until(
+                lambda m: (
+                    m.get_type() == "HEARTBEAT" and m.base_mode & ml.MAV_MODE_FLAG_SAFETY_ARMED
+                )
+            )
             # idle on the ground: DISARM_DELAY (10 s simulated) later it disarms itself
-            client.until(lambda m: m.get_type() == "HEARTBEAT"
-                         and not m.base_mode & ml.MAV_MODE_FLAG_SAFETY_ARMED, seconds=3)
+            client.until(
+                lambda m: (
+                    m.get_type() == "HEARTBEAT" and not m.base_mode & ml.MAV_MODE_FLAG_SAFETY_ARMED
+                ),
+                seconds=3,
+            )
             assert double.state()["time"] >= 30.0
         finally:
             client.close()
@@ -154,8 +173,9 @@ def test_takeoff_needs_arming_and_guided() -> None:
 
 
 def test_battery_drains_and_its_failsafe_fires() -> None:
-    sim = VehicleSim(SimParams(model="rover", ekf_delay=0.5, battery_capacity_s=100.0,
-                               battery_failsafe_pct=50.0))
+    sim = VehicleSim(
+        SimParams(model="rover", ekf_delay=0.5, battery_capacity_s=100.0, battery_failsafe_pct=50.0)
+    )
     sim.connect()
     sim.step(1.0)
     sim._command(ml.MAV_CMD_DO_SET_MODE, (1, 15, 0, 0, 0, 0, 0))
@@ -169,17 +189,30 @@ def test_battery_drains_and_its_failsafe_fires() -> None:
     assert sim.failsafe and sim.mode_name == "HOLD"
     assert 49.0 <= sim.battery <= 50.0
     parser = ml.MAVLink(None)
-    texts = [m.text for m in parser.parse_buffer(b"".join(sim.take_output())) or []
-             if m.get_type() == "STATUSTEXT"]
+    texts = [
+        m.text
+        for m in parser.parse_buffer(b"".join(sim.take_output())) or []
+        if m.get_type() == "STATUSTEXT"
+    ]
     assert "Battery Failsafe" in texts
 
 
 def test_command_line_serves_a_vehicle() -> None:
     port = free_port()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "plansys_bridge_adapters.mavlink.double", "--model", "rover",
-         "--port", str(port), "--speedup", "10"],
-        stdout=subprocess.PIPE, text=True,
+        [
+            sys.executable,
+            "-m",
+            "plansys_bridge_adapters.mavlink.double",
+            "--model",
+            "rover",
+            "--port",
+            str(port),
+            "--speedup",
+            "10",
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
     )
     try:
         assert proc.stdout is not None

@@ -91,16 +91,17 @@ def copter_mission_with_fault(inject: Any, max_replans: int) -> tuple[str, Missi
 
 def failed_actions(report: MissionReport) -> list[tuple[str, str]]:
     assert report.result is not None
-    return [(r.text, r.message) for r in report.result.actions
-            if r.status == ActionStatus.FAILED]
+    return [(r.text, r.message) for r in report.result.actions if r.status == ActionStatus.FAILED]
 
 
 @pytest.mark.parametrize(
     ("inject", "reason"),
     [
         (lambda d: d.failsafe("Battery"), "failsafe: 'Battery Failsafe'"),
-        (lambda d: d.statustext("Crash: Disarming", ml.MAV_SEVERITY_CRITICAL),
-         "vehicle reported MAV_SEVERITY_CRITICAL: 'Crash: Disarming'"),
+        (
+            lambda d: d.statustext("Crash: Disarming", ml.MAV_SEVERITY_CRITICAL),
+            "vehicle reported MAV_SEVERITY_CRITICAL: 'Crash: Disarming'",
+        ),
         (lambda d: d.drop_link(1000.0), "no HEARTBEAT for "),
     ],
     ids=["failsafe", "statustext", "heartbeat"],
@@ -129,8 +130,10 @@ def test_low_battery_halts_the_flight_and_the_copter_brakes() -> None:
     assert not report.success
     assert report.status == "replan_failed"
     assert failed_actions(report) == [
-        ("(fly uav1 pad north_field)",
-         "over all requirement (not (battery_low uav1)) no longer holds")
+        (
+            "(fly uav1 pad north_field)",
+            "over all requirement (not (battery_low uav1)) no longer holds",
+        )
     ]
     [state] = states
     assert state["mode"] == "BRAKE" and not state["landed"]
@@ -144,8 +147,10 @@ def test_mode_taken_over_mid_mission_is_replanned_and_completed() -> None:
     assert report.success, report.summary()
     assert report.result is not None and report.result.replans == 1
     assert failed_actions(report) == [
-        ("(fly uav1 pad north_field)",
-         f"{url}: mode changed to LOITER by someone else (expected GUIDED)")
+        (
+            "(fly uav1 pad north_field)",
+            f"{url}: mode changed to LOITER by someone else (expected GUIDED)",
+        )
     ]
 
 
@@ -162,5 +167,4 @@ def test_refused_takeoff_fails_the_mission_with_the_reason() -> None:
     assert report.result is not None
     failed = [r for r in report.result.actions if r.status == ActionStatus.FAILED]
     assert [r.text for r in failed] == ["(takeoff uav1 pad)"]
-    assert failed[0].message == (f"{double.url}: MAV_CMD_NAV_TAKEOFF refused "
-                                 "(MAV_RESULT_DENIED)")
+    assert failed[0].message == (f"{double.url}: MAV_CMD_NAV_TAKEOFF refused (MAV_RESULT_DENIED)")

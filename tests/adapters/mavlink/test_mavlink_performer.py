@@ -28,8 +28,9 @@ from plansys_bridge.pddl.parser import parse_domain
 POLICY = AuctionPolicy(retry_period=0.2, give_up_after=5.0, liveness_timeout=3.0)
 
 
-async def act(hub: Hub, action: str, *args: str,
-              feedback: list[tuple[float, str]] | None = None) -> ActionOutcome:
+async def act(
+    hub: Hub, action: str, *args: str, feedback: list[tuple[float, str]] | None = None
+) -> ActionOutcome:
     client = ActionClient(hub, action, args, policy=POLICY)
     sink = feedback if feedback is not None else []
     return await client.run(lambda c, s: sink.append((c, s)))
@@ -67,8 +68,7 @@ def near(double: VehicleDouble, north: float, east: float, tol: float = 1.5) -> 
     return abs(s["north"] - north) <= tol and abs(s["east"] - east) <= tol
 
 
-def test_copter_and_rover_missions_run_at_once(copter: VehicleDouble,
-                                                rover: VehicleDouble) -> None:
+def test_copter_and_rover_missions_run_at_once(copter: VehicleDouble, rover: VehicleDouble) -> None:
     results: dict[str, list[ActionOutcome]] = {"uav1": [], "ugv1": []}
     fly_feedback: list[tuple[float, str]] = []
 
@@ -107,8 +107,10 @@ def test_copter_and_rover_missions_run_at_once(copter: VehicleDouble,
 
 
 def test_specialised_performers_bid_only_for_their_vehicle() -> None:
-    with VehicleDouble("rover", speedup=SPEEDUP, ekf_delay=2.0) as r1, \
-            VehicleDouble("rover", speedup=SPEEDUP, ekf_delay=2.0) as r2:
+    with (
+        VehicleDouble("rover", speedup=SPEEDUP, ekf_delay=2.0) as r1,
+        VehicleDouble("rover", speedup=SPEEDUP, ekf_delay=2.0) as r2,
+    ):
         outcomes: list[ActionOutcome] = []
 
         async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
@@ -121,8 +123,9 @@ def test_specialised_performers_bid_only_for_their_vehicle() -> None:
         assert near(r2, -30, 25) and near(r1, 20, 50)
 
 
-def fly_with_fault(double: VehicleDouble, inject: Callable[[VehicleDouble], None],
-                   target: str = "north_field") -> tuple[ActionOutcome, ActionOutcome]:
+def fly_with_fault(
+    double: VehicleDouble, inject: Callable[[VehicleDouble], None], target: str = "north_field"
+) -> tuple[ActionOutcome, ActionOutcome]:
     """Take off, start a flight, inject a fault once the copter is on its way."""
     out: list[ActionOutcome] = []
 
@@ -142,8 +145,9 @@ def test_mode_change_by_someone_else_fails_the_action(copter: VehicleDouble) -> 
     takeoff, flight = fly_with_fault(copter, lambda d: d.change_mode("LOITER"))
     assert takeoff.success
     assert not flight.success
-    assert flight.status == (f"{copter.url}: mode changed to LOITER by someone else "
-                             "(expected GUIDED)")
+    assert flight.status == (
+        f"{copter.url}: mode changed to LOITER by someone else (expected GUIDED)"
+    )
 
 
 def test_failsafe_fails_the_action(copter: VehicleDouble) -> None:
@@ -154,16 +158,17 @@ def test_failsafe_fails_the_action(copter: VehicleDouble) -> None:
 
 
 def test_statustext_error_fails_the_action(copter: VehicleDouble) -> None:
-    _, flight = fly_with_fault(copter, lambda d: d.statustext("EKF3 lane switch 1",
-                                                              ml.MAV_SEVERITY_ERROR))
+    _, flight = fly_with_fault(
+        copter, lambda d: d.statustext("EKF3 lane switch 1", ml.MAV_SEVERITY_ERROR)
+    )
     assert not flight.success
-    assert flight.status == (f"{copter.url}: vehicle reported MAV_SEVERITY_ERROR: "
-                             "'EKF3 lane switch 1'")
+    assert flight.status == (
+        f"{copter.url}: vehicle reported MAV_SEVERITY_ERROR: 'EKF3 lane switch 1'"
+    )
 
 
 def test_warning_statustext_does_not_fail_the_action(copter: VehicleDouble) -> None:
-    _, flight = fly_with_fault(copter, lambda d: d.statustext("Wind high",
-                                                              ml.MAV_SEVERITY_WARNING))
+    _, flight = fly_with_fault(copter, lambda d: d.statustext("Wind high", ml.MAV_SEVERITY_WARNING))
     assert flight.success, flight.status
 
 
@@ -206,8 +211,9 @@ def test_arming_is_retried_until_accepted() -> None:
 
 
 def test_guided_refused_before_the_ekf_is_set_after_it() -> None:
-    with VehicleDouble("copter", speedup=SPEEDUP, ekf_delay=20.0,
-                       position_modes_need_ekf=True) as double:
+    with VehicleDouble(
+        "copter", speedup=SPEEDUP, ekf_delay=20.0, position_modes_need_ekf=True
+    ) as double:
         out: list[ActionOutcome] = []
 
         async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
@@ -226,11 +232,16 @@ def test_ekf_that_never_converges_fails_with_the_reason() -> None:
         async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
             out.append(await act(hub, "takeoff", "uav1", "pad"))
 
-        run_with([("uav1", double)], body,
-                 timeouts={"heartbeat": 1.0, "command": 0.5, "ekf": 0.5, "arm": 1, "action": 5})
+        run_with(
+            [("uav1", double)],
+            body,
+            timeouts={"heartbeat": 1.0, "command": 0.5, "ekf": 0.5, "arm": 1, "action": 5},
+        )
         assert not out[0].success
-        assert out[0].status == (f"{double.url}: timed out after 0.5 s waiting for the EKF "
-                                 "to use GPS (EKF_STATUS_REPORT)")
+        assert out[0].status == (
+            f"{double.url}: timed out after 0.5 s waiting for the EKF "
+            "to use GPS (EKF_STATUS_REPORT)"
+        )
 
 
 def test_flying_before_takeoff_is_refused(copter: VehicleDouble) -> None:
@@ -247,8 +258,10 @@ def test_flying_before_takeoff_is_refused(copter: VehicleDouble) -> None:
     assert "no location 'atlantis'" in out[1].status
 
 
-@pytest.mark.parametrize(("model", "vehicle", "action", "hold_mode"),
-                         [("copter", "uav1", "fly", "BRAKE"), ("rover", "ugv1", "drive", "HOLD")])
+@pytest.mark.parametrize(
+    ("model", "vehicle", "action", "hold_mode"),
+    [("copter", "uav1", "fly", "BRAKE"), ("rover", "ugv1", "drive", "HOLD")],
+)
 def test_cancel_holds_position(model: str, vehicle: str, action: str, hold_mode: str) -> None:
     with VehicleDouble(model, speedup=SPEEDUP, ekf_delay=2.0) as double:  # type: ignore[arg-type]
         out: list[ActionOutcome] = []
@@ -281,8 +294,12 @@ def test_battery_goes_into_the_knowledge(copter: VehicleDouble) -> None:
     seen: list[tuple[float | None, bool]] = []
 
     def snapshot() -> None:
-        seen.append((knowledge.get_function("battery", ["uav1"]),
-                     knowledge.exist_predicate("(battery_low uav1)")))
+        seen.append(
+            (
+                knowledge.get_function("battery", ["uav1"]),
+                knowledge.exist_predicate("(battery_low uav1)"),
+            )
+        )
 
     async def until(predicate: Callable[[], bool]) -> None:
         for _ in range(300):
@@ -304,9 +321,16 @@ def test_battery_goes_into_the_knowledge(copter: VehicleDouble) -> None:
         await until(lambda: not knowledge.exist_predicate("(battery_low uav1)"))
         snapshot()
 
-    run_with([("uav1", copter)], body, knowledge=knowledge,
-             telemetry={"battery_function": "battery", "low_battery_predicate": "battery_low",
-                        "low_battery_threshold": 20})
+    run_with(
+        [("uav1", copter)],
+        body,
+        knowledge=knowledge,
+        telemetry={
+            "battery_function": "battery",
+            "low_battery_predicate": "battery_low",
+            "low_battery_threshold": 20,
+        },
+    )
     assert seen == [(100.0, False), (12.0, True), (22.0, True), (26.0, False)]
 
 
@@ -322,8 +346,9 @@ def test_telemetry_the_domain_lacks_is_dropped_once(copter: VehicleDouble) -> No
         assert publisher is not None
         assert publisher.disabled == {"battery_function"}
 
-    run_with([("uav1", copter)], body, knowledge=knowledge,
-             telemetry={"battery_function": "charge"})
+    run_with(
+        [("uav1", copter)], body, knowledge=knowledge, telemetry={"battery_function": "charge"}
+    )
     assert out[0].success  # a telemetry mismatch never stops the vehicle
 
 
@@ -333,8 +358,7 @@ def test_unreachable_vehicle_names_the_url(tmp_path: Path) -> None:
     async def main() -> None:
         hub = make_hub()
         await hub.start()
-        performer = build(performer_config("uav1", url, "copter",
-                                           timeouts={"connect": 0.6}), hub)
+        performer = build(performer_config("uav1", url, "copter", timeouts={"connect": 0.6}), hub)
         try:
             with pytest.raises(LinkError, match=f"^{url}: cannot open the link"):
                 await performer.start()
@@ -369,8 +393,12 @@ def test_performer_starts_its_own_double() -> None:
         await hub.start()
         config = performer_config("ugv1", "unused", "rover")
         del config["url"]
-        config["double"] = {"model": "rover", "speedup": SPEEDUP, "ekf_delay": 2.0,
-                            "home": {"lat": -35.0, "lon": 149.0, "alt": 10.0}}
+        config["double"] = {
+            "model": "rover",
+            "speedup": SPEEDUP,
+            "ekf_delay": 2.0,
+            "home": {"lat": -35.0, "lon": 149.0, "alt": 10.0},
+        }
         performer = build(config, hub)
         await performer.start()
         try:
@@ -405,8 +433,11 @@ def test_rtl_and_hold_actions(copter: VehicleDouble, rover: VehicleDouble) -> No
 
     run_with([("uav1", copter), ("ugv1", rover)], body)
     assert [o.status for o in out["uav1"][2:]] == ["holding in LOITER", "landed and disarmed"]
-    assert [o.status for o in out["ugv1"][1:]] == ["holding in HOLD", "back at home, holding",
-                                                   "stopped and disarmed"]
+    assert [o.status for o in out["ugv1"][1:]] == [
+        "holding in HOLD",
+        "back at home, holding",
+        "stopped and disarmed",
+    ]
     assert all(o.success for o in out["uav1"] + out["ugv1"])
     assert near(copter, 0, 0) and copter.state()["mode"] == "RTL"
     assert near(rover, 0, 0) and not rover.state()["armed"]
@@ -441,14 +472,22 @@ def test_vehicle_restarted_is_reconnected() -> None:
             while vehicle.connected:  # the reader thread reports the closed link
                 await asyncio.sleep(0.01)
             out.append(await act(hub, "drive", "ugv1", "gate", "yard"))
-            second.append(VehicleDouble("rover", speedup=SPEEDUP, ekf_delay=2.0,
-                                        port=port).start())
+            second.append(VehicleDouble("rover", speedup=SPEEDUP, ekf_delay=2.0, port=port).start())
             out.append(await act(hub, "drive", "ugv1", "yard", "gate"))
 
         try:
-            run_with([("ugv1", first)], body, timeouts={
-                "connect": 0.5, "heartbeat": 1.0, "command": 0.5, "ekf": 20, "arm": 10,
-                "action": 30})
+            run_with(
+                [("ugv1", first)],
+                body,
+                timeouts={
+                    "connect": 0.5,
+                    "heartbeat": 1.0,
+                    "command": 0.5,
+                    "ekf": 20,
+                    "arm": 10,
+                    "action": 30,
+                },
+            )
         finally:
             for d in second:
                 d.stop()

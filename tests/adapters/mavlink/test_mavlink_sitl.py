@@ -23,8 +23,7 @@ from plansys_bridge.mission_config import mission_from_dict
 
 COPTER_URL = os.environ.get("ARDUPILOT_SITL_COPTER_URL", "")
 ROVER_URL = os.environ.get("ARDUPILOT_SITL_ROVER_URL", "")
-SITL_TIMEOUTS = {"connect": 60, "heartbeat": 5, "command": 2, "ekf": 300, "arm": 120,
-                 "action": 600}
+SITL_TIMEOUTS = {"connect": 60, "heartbeat": 5, "command": 2, "ekf": 300, "arm": 120, "action": 600}
 
 pytestmark = pytest.mark.sitl
 
@@ -46,19 +45,25 @@ def _run(name: str, urls: dict[str, str]) -> None:
     assert report.success, report.summary() + "\n" + "\n".join(lines)
 
 
-@pytest.mark.skipif(not COPTER_URL, reason="set ARDUPILOT_SITL_COPTER_URL (e.g. "
-                    "tcp:127.0.0.1:5760) to fly a real ArduCopter SITL")
+@pytest.mark.skipif(
+    not COPTER_URL,
+    reason="set ARDUPILOT_SITL_COPTER_URL (e.g. tcp:127.0.0.1:5760) to fly a real ArduCopter SITL",
+)
 def test_copter_mission_on_sitl() -> None:
     _run("mavlink_copter.yaml", {"copter": COPTER_URL})
 
 
-@pytest.mark.skipif(not ROVER_URL, reason="set ARDUPILOT_SITL_ROVER_URL (e.g. "
-                    "tcp:127.0.0.1:5770) to drive a real ArduRover SITL")
+@pytest.mark.skipif(
+    not ROVER_URL,
+    reason="set ARDUPILOT_SITL_ROVER_URL (e.g. tcp:127.0.0.1:5770) to drive a real ArduRover SITL",
+)
 def test_rover_mission_on_sitl() -> None:
     _run("mavlink_rover.yaml", {"rover": ROVER_URL})
 
 
-@pytest.mark.skipif(not (COPTER_URL and ROVER_URL), reason="set both "
-                    "ARDUPILOT_SITL_COPTER_URL and ARDUPILOT_SITL_ROVER_URL for the fleet mission")
+@pytest.mark.skipif(
+    not (COPTER_URL and ROVER_URL),
+    reason="set both ARDUPILOT_SITL_COPTER_URL and ARDUPILOT_SITL_ROVER_URL for the fleet mission",
+)
 def test_fleet_mission_on_sitl() -> None:
     _run("mavlink_fleet.yaml", {"copter": COPTER_URL, "rover": ROVER_URL})

@@ -18,8 +18,9 @@ from plansys_bridge_adapters.mavlink.errors import (
 from plansys_bridge_adapters.mavlink.vehicle import LinkSettings, MavlinkVehicle, _device
 from pymavlink.dialects.v20 import ardupilotmega as ml
 
-FAST = LinkSettings(heartbeat_timeout=0.5, command_timeout=0.2, command_retries=2,
-                    connect_timeout=2.0)
+FAST = LinkSettings(
+    heartbeat_timeout=0.5, command_timeout=0.2, command_retries=2, connect_timeout=2.0
+)
 
 
 def with_vehicle(url: str, body: Callable[[MavlinkVehicle], Awaitable[None]]) -> MavlinkVehicle:
@@ -53,16 +54,18 @@ async def error_of(work: Awaitable[object], kind: type[Exception] = Exception) -
 @pytest.mark.parametrize("peer", [False, True], ids=["udpout", "udpin"])
 def test_udp_links_both_ways(peer: bool) -> None:
     out = ("127.0.0.1", free_port("udp")) if peer else None
-    with VehicleDouble("rover", speedup=SPEEDUP, ekf_delay=2.0, transport="udp",
-                       peer=out) as double:
+    with VehicleDouble(
+        "rover", speedup=SPEEDUP, ekf_delay=2.0, transport="udp", peer=out
+    ) as double:
         v = with_vehicle(double.url, arm_guided)
         assert double.url.startswith("udpin:" if peer else "udpout:")
         assert v.model == "rover"
         assert double.state()["armed"]
 
 
-def test_telemetry_cache_fills_after_connect(copter: VehicleDouble,
-                                            monkeypatch: pytest.MonkeyPatch) -> None:
+def test_telemetry_cache_fills_after_connect(
+    copter: VehicleDouble, monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.delenv("MAVLINK20", raising=False)
 
     async def body(v: MavlinkVehicle) -> None:
@@ -91,8 +94,10 @@ def test_refusal_quotes_the_vehicle_and_arming_retries_until_timeout() -> None:
     with VehicleDouble("copter", speedup=1.0, ekf_delay=1e6) as double:
         with_vehicle(double.url, body)
         arms = [c for c in double.sim.commands_seen if c == ml.MAV_CMD_COMPONENT_ARM_DISARM]
-    assert errors == [f"{double.url}: arming refused (MAV_RESULT_FAILED): still refused "
-                      "after 0.5 s: PreArm: Need Position Estimate"]
+    assert errors == [
+        f"{double.url}: arming refused (MAV_RESULT_FAILED): still refused "
+        "after 0.5 s: PreArm: Need Position Estimate"
+    ]
     assert len(arms) >= 3
 
 
@@ -140,8 +145,10 @@ def test_mode_change_we_asked_for_is_not_a_fault(copter: VehicleDouble) -> None:
         outcome.append(await error_of(v.supervise(asyncio.sleep(5)), VehicleFault))
 
     with_vehicle(copter.url, body)
-    assert outcome == ["ok", f"{copter.url}: mode changed to ALT_HOLD by someone else "
-                             "(expected GUIDED)"]
+    assert outcome == [
+        "ok",
+        f"{copter.url}: mode changed to ALT_HOLD by someone else (expected GUIDED)",
+    ]
 
 
 def test_unexpected_disarm_is_a_fault(copter: VehicleDouble) -> None:

@@ -108,8 +108,10 @@ class VehicleDouble:
             sock.bind((self.host, self._requested_port))
         except OSError as exc:
             sock.close()
-            raise LinkError(f"{self.transport}:{self.host}:{self._requested_port}",
-                            f"vehicle double cannot bind: {exc}") from exc
+            raise LinkError(
+                f"{self.transport}:{self.host}:{self._requested_port}",
+                f"vehicle double cannot bind: {exc}",
+            ) from exc
         if self.transport == "tcp":
             sock.listen(1)
         sock.setblocking(False)

@@ -70,11 +70,24 @@ STREAMABLE = frozenset(
 )
 
 # Copter modes that may be armed in (ArduCopter refuses e.g. RTL and LAND).
-COPTER_ARMABLE = frozenset({"STABILIZE", "ACRO", "ALT_HOLD", "GUIDED", "LOITER", "POSHOLD",
-                            "AUTO", "SPORT", "DRIFT", "BRAKE"})
+COPTER_ARMABLE = frozenset(
+    {
+        "STABILIZE",
+        "ACRO",
+        "ALT_HOLD",
+        "GUIDED",
+        "LOITER",
+        "POSHOLD",
+        "AUTO",
+        "SPORT",
+        "DRIFT",
+        "BRAKE",
+    }
+)
 # Modes that need a position estimate to be entered while armed (ArduPilot's requires_GPS).
-NEEDS_POSITION = frozenset({"GUIDED", "LOITER", "RTL", "AUTO", "POSHOLD", "BRAKE", "CIRCLE",
-                            "SMART_RTL", "HOLD"})
+NEEDS_POSITION = frozenset(
+    {"GUIDED", "LOITER", "RTL", "AUTO", "POSHOLD", "BRAKE", "CIRCLE", "SMART_RTL", "HOLD"}
+)
 FORCE_DISARM_MAGIC = 21196
 
 
@@ -111,8 +124,9 @@ class VehicleSim:
         self.p = params
         self.model: Model = params.model
         self._outbox: list[bytes] = []
-        self.mav = ML.MAVLink(_Collector(self._outbox), srcSystem=params.system_id,
-                              srcComponent=params.component_id)
+        self.mav = ML.MAVLink(
+            _Collector(self._outbox), srcSystem=params.system_id, srcComponent=params.component_id
+        )
         self.time = 0.0
         self.started = False
         self.armed = False
@@ -178,13 +192,27 @@ class VehicleSim:
         kind = msg.get_type()
         if kind == "COMMAND_LONG":
             if msg.target_system in (0, self.p.system_id):
-                params = (msg.param1, msg.param2, msg.param3, msg.param4,
-                          msg.param5, msg.param6, msg.param7)
+                params = (
+                    msg.param1,
+                    msg.param2,
+                    msg.param3,
+                    msg.param4,
+                    msg.param5,
+                    msg.param6,
+                    msg.param7,
+                )
                 self._command(msg.command, params)
         elif kind == "COMMAND_INT":
             if msg.target_system in (0, self.p.system_id):
-                params = (msg.param1, msg.param2, msg.param3, msg.param4,
-                          msg.x / 1e7, msg.y / 1e7, msg.z)
+                params = (
+                    msg.param1,
+                    msg.param2,
+                    msg.param3,
+                    msg.param4,
+                    msg.x / 1e7,
+                    msg.y / 1e7,
+                    msg.z,
+                )
                 self._command(msg.command, params, frame=msg.frame)
         elif kind == "SET_MODE":
             if msg.target_system in (0, self.p.system_id):
@@ -221,8 +249,12 @@ class VehicleSim:
         elif command == ML.MAV_CMD_NAV_TAKEOFF:
             self._ack(command, self._takeoff(p[6]))
         elif command == ML.MAV_CMD_NAV_LAND:
-            self._ack(command, self._set_mode(mode_number(self.model, "LAND"))
-                      if self.model == "copter" else ML.MAV_RESULT_UNSUPPORTED)
+            self._ack(
+                command,
+                self._set_mode(mode_number(self.model, "LAND"))
+                if self.model == "copter"
+                else ML.MAV_RESULT_UNSUPPORTED,
+            )
         elif command == ML.MAV_CMD_NAV_RETURN_TO_LAUNCH:
             self._ack(command, self._set_mode(mode_number(self.model, "RTL")))
         elif command == ML.MAV_CMD_DO_REPOSITION:
@@ -321,9 +353,12 @@ class VehicleSim:
             return
         if msg.type_mask & 0b111:
             return  # position ignored: this double only flies to positions
-        if msg.coordinate_frame not in (ML.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
-                                        ML.MAV_FRAME_GLOBAL_RELATIVE_ALT, ML.MAV_FRAME_GLOBAL_INT,
-                                        ML.MAV_FRAME_GLOBAL):
+        if msg.coordinate_frame not in (
+            ML.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+            ML.MAV_FRAME_GLOBAL_RELATIVE_ALT,
+            ML.MAV_FRAME_GLOBAL_INT,
+            ML.MAV_FRAME_GLOBAL,
+        ):
             return
         alt = float(msg.alt)
         if msg.coordinate_frame in (ML.MAV_FRAME_GLOBAL_INT, ML.MAV_FRAME_GLOBAL):
@@ -367,8 +402,11 @@ class VehicleSim:
         self._stream()
 
     def _check_battery(self) -> None:
-        if (self.p.battery_failsafe_pct > 0 and not self.failsafe
-                and self.battery <= self.p.battery_failsafe_pct):
+        if (
+            self.p.battery_failsafe_pct > 0
+            and not self.failsafe
+            and self.battery <= self.p.battery_failsafe_pct
+        ):
             self.inject_failsafe("Battery")
 
     def _auto_disarm(self) -> None:
@@ -389,8 +427,9 @@ class VehicleSim:
                     self._climb_to(self.takeoff_alt, dt)
                     if self.alt >= self.takeoff_alt - 0.05:
                         self.takeoff_alt = None
-                        self.guided_target = GeoPoint(self.position.lat, self.position.lon,
-                                                      self.alt)
+                        self.guided_target = GeoPoint(
+                            self.position.lat, self.position.lon, self.alt
+                        )
                 elif self.guided_target is not None and not self.landed:
                     self._fly_to(self.guided_target, dt)
             elif name == "LAND":
@@ -491,17 +530,39 @@ class VehicleSim:
         if msg_id == ML.MAVLINK_MSG_ID_GLOBAL_POSITION_INT:
             pos = self.position
             return self.mav.global_position_int_encode(
-                boot_ms, int(pos.lat * 1e7), int(pos.lon * 1e7),
-                int((self.p.home.alt + self.alt) * 1000), int(self.alt * 1000),
-                int(self.vn * 100), int(self.ve * 100), int(self.vd * 100),
-                int(self.heading * 100) % 36000)
+                boot_ms,
+                int(pos.lat * 1e7),
+                int(pos.lon * 1e7),
+                int((self.p.home.alt + self.alt) * 1000),
+                int(self.alt * 1000),
+                int(self.vn * 100),
+                int(self.ve * 100),
+                int(self.vd * 100),
+                int(self.heading * 100) % 36000,
+            )
         if msg_id == ML.MAVLINK_MSG_ID_SYS_STATUS:
-            sensors = (ML.MAV_SYS_STATUS_SENSOR_3D_GYRO | ML.MAV_SYS_STATUS_SENSOR_3D_ACCEL
-                       | ML.MAV_SYS_STATUS_SENSOR_GPS | ML.MAV_SYS_STATUS_AHRS)
+            sensors = (
+                ML.MAV_SYS_STATUS_SENSOR_3D_GYRO
+                | ML.MAV_SYS_STATUS_SENSOR_3D_ACCEL
+                | ML.MAV_SYS_STATUS_SENSOR_GPS
+                | ML.MAV_SYS_STATUS_AHRS
+            )
             health = sensors | (ML.MAV_SYS_STATUS_PREARM_CHECK if self.ekf_ready else 0)
             return self.mav.sys_status_encode(
-                sensors, sensors, health, 200, self._voltage_mv(),
-                1500 if self.armed else 50, round(self.battery), 0, 0, 0, 0, 0, 0)
+                sensors,
+                sensors,
+                health,
+                200,
+                self._voltage_mv(),
+                1500 if self.armed else 50,
+                round(self.battery),
+                0,
+                0,
+                0,
+                0,
+                0,
+                0,
+            )
         if msg_id == ML.MAVLINK_MSG_ID_EKF_STATUS_REPORT:
             if self.time < 1.0:
                 flags = EKF_FLAGS_BOOTING
@@ -513,18 +574,31 @@ class VehicleSim:
                 return None  # no home before the EKF has an origin
             home = self.p.home
             return self.mav.home_position_encode(
-                int(home.lat * 1e7), int(home.lon * 1e7), int(home.alt * 1000),
-                0.0, 0.0, 0.0, [1.0, 0.0, 0.0, 0.0], 0.0, 0.0, 0.0)
+                int(home.lat * 1e7),
+                int(home.lon * 1e7),
+                int(home.alt * 1000),
+                0.0,
+                0.0,
+                0.0,
+                [1.0, 0.0, 0.0, 0.0],
+                0.0,
+                0.0,
+                0.0,
+            )
         if msg_id == ML.MAVLINK_MSG_ID_BATTERY_STATUS:
             cells = [self._voltage_mv() // 3] * 3 + [65535] * 7
             return self.mav.battery_status_encode(
-                0, 0, 0, 32767, cells, 1500 if self.armed else 50, -1, -1,
-                round(self.battery))
+                0, 0, 0, 32767, cells, 1500 if self.armed else 50, -1, -1, round(self.battery)
+            )
         if msg_id == ML.MAVLINK_MSG_ID_VFR_HUD:
             return self.mav.vfr_hud_encode(
-                math.hypot(self.vn, self.ve), math.hypot(self.vn, self.ve),
-                int(self.heading), 50 if self.armed else 0,
-                self.p.home.alt + self.alt, -self.vd)
+                math.hypot(self.vn, self.ve),
+                math.hypot(self.vn, self.ve),
+                int(self.heading),
+                50 if self.armed else 0,
+                self.p.home.alt + self.alt,
+                -self.vd,
+            )
         return None
 
     def _heartbeat(self) -> Any:
@@ -542,8 +616,9 @@ class VehicleSim:
         else:
             state = ML.MAV_STATE_STANDBY
         mav_type = MAV_TYPE_QUADROTOR if self.model == "copter" else MAV_TYPE_GROUND_ROVER
-        return self.mav.heartbeat_encode(mav_type, MAV_AUTOPILOT_ARDUPILOTMEGA, base,
-                                         self.mode, state)
+        return self.mav.heartbeat_encode(
+            mav_type, MAV_AUTOPILOT_ARDUPILOTMEGA, base, self.mode, state
+        )
 
     def _voltage_mv(self) -> int:
         return int((10.5 + 2.1 * self.battery / 100.0) * 1000)
@@ -554,9 +629,15 @@ class VehicleSim:
     def snapshot(self) -> Mapping[str, Any]:
         """A plain view of the state, for tests and the command line."""
         return {
-            "time": self.time, "armed": self.armed, "mode": self.mode_name,
-            "alt": self.alt, "north": self.north, "east": self.east,
-            "landed": self.landed, "battery": self.battery, "ekf_ready": self.ekf_ready,
+            "time": self.time,
+            "armed": self.armed,
+            "mode": self.mode_name,
+            "alt": self.alt,
+            "north": self.north,
+            "east": self.east,
+            "landed": self.landed,
+            "battery": self.battery,
+            "ekf_ready": self.ekf_ready,
         }
 
 
