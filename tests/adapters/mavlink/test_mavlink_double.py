@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import socket
 import subprocess
 import sys
@@ -235,3 +236,42 @@ def test_bad_double_settings_are_refused() -> None:
         VehicleDouble("plane")  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="speedup"):
         VehicleDouble("copter", speedup=0)
+
+
+def test_non_numbers_in_commands_are_refused_not_fatal() -> None:
+    """NaN/infinite parameters and impossible coordinates are refused, as ArduPilot does;
+    the double keeps serving (they used to end its thread with ValueError)."""
+    nan, inf = float("nan"), float("inf")
+    with VehicleDouble("copter", speedup=50, ekf_delay=0.0) as double:
+        client = RawClient(double.url)
+        try:
+            client.until(lambda m: m.get_type() == "HEARTBEAT")
+            denied = ml.MAV_RESULT_DENIED
+            assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, inf) == denied
+            assert client.command(ml.MAV_CMD_COMPONENT_ARM_DISARM, 1, nan) == denied
+            assert client.command(ml.MAV_CMD_SET_MESSAGE_INTERVAL, nan, 1e5) == denied
+            guided = COPTER_MODES["GUIDED"]
+            assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, guided) == ml.MAV_RESULT_ACCEPTED
+            assert client.command(ml.MAV_CMD_COMPONENT_ARM_DISARM, 1) == ml.MAV_RESULT_ACCEPTED
+            failed = ml.MAV_RESULT_FAILED
+            assert client.command(ml.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, nan, 0, 0, nan) == failed
+            assert client.command(ml.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, nan, 0, 0, 5) == 0
+            assert client.command(ml.MAV_CMD_DO_REPOSITION, -1, 0, 0, nan, 95, 0, 5) == denied
+            assert client.command(ml.MAV_CMD_DO_REPOSITION, -1, 0, 0, nan, nan, 0, 5) == denied
+            client.mav.set_position_target_global_int_send(
+                0, 1, 1, 6, 0x0DF8, 2**31 - 1, 0, 5.0, 0, 0, 0, 0, 0, 0, 0, 0
+            )
+            client.mav.set_position_target_global_int_send(
+                0, 1, 1, 6, 0x0DF8, 0, 0, nan, 0, 0, 0, 0, 0, 0, 0, 0
+            )
+            client.pump(0.1)
+            state = double.state()
+            assert all(math.isfinite(state[k]) for k in ("alt", "north", "east"))
+            target = double.sim.guided_target
+            assert target is None or abs(target.lat) <= 90
+            # still alive: it answers and its heartbeat goes on
+            assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, guided) == ml.MAV_RESULT_ACCEPTED
+            client.pump(0.05)
+            client.until(lambda m: m.get_type() == "HEARTBEAT")
+        finally:
+            client.close()

@@ -237,6 +237,14 @@ class VehicleSim:
         if command in self._refusals:
             self._ack(command, self._refusals.pop(command))
             return
+        try:
+            self._obey(command, p)
+        except (ValueError, OverflowError):
+            # NaN or infinity where a mode, message id or flag is needed: refused,
+            # never the end of the double's thread.
+            self._ack(command, ML.MAV_RESULT_DENIED)
+
+    def _obey(self, command: int, p: tuple[float, ...]) -> None:
         if command == ML.MAV_CMD_SET_MESSAGE_INTERVAL:
             self._ack(command, self._set_interval(int(p[0]), p[1]))
         elif command == ML.MAV_CMD_REQUEST_MESSAGE:
@@ -332,7 +340,12 @@ class VehicleSim:
     def _takeoff(self, alt: float) -> int:
         if self.model != "copter":
             return ML.MAV_RESULT_UNSUPPORTED
-        if not self.armed or self.mode_name != "GUIDED" or not self.landed or alt <= 0:
+        if (
+            not self.armed
+            or self.mode_name != "GUIDED"
+            or not self.landed
+            or not 0 < alt < math.inf
+        ):
             return ML.MAV_RESULT_FAILED
         self.takeoff_alt = float(alt)
         self.landed = False
@@ -342,6 +355,8 @@ class VehicleSim:
     def _reposition(self, p: tuple[float, ...]) -> int:
         if self.mode_name != "GUIDED" or not self.armed or (self.model == "copter" and self.landed):
             return ML.MAV_RESULT_FAILED
+        if not _valid_latlon(p[4], p[5]) or math.isinf(p[6]):
+            return ML.MAV_RESULT_DENIED  # ArduPilot: check_latlng, else DENIED
         alt = self.alt if math.isnan(p[6]) else float(p[6])
         self.guided_target = GeoPoint(p[4], p[5], alt)
         return ML.MAV_RESULT_ACCEPTED
@@ -360,6 +375,8 @@ class VehicleSim:
             ML.MAV_FRAME_GLOBAL,
         ):
             return
+        if not _valid_latlon(msg.lat_int / 1e7, msg.lon_int / 1e7) or not math.isfinite(msg.alt):
+            return  # ArduPilot drops targets that fail check_latlng
         alt = float(msg.alt)
         if msg.coordinate_frame in (ML.MAV_FRAME_GLOBAL_INT, ML.MAV_FRAME_GLOBAL):
             alt -= self.p.home.alt
@@ -649,3 +666,8 @@ class _Collector:
 
     def write(self, data: bytes) -> None:
         self._sink.append(bytes(data))
+
+
+def _valid_latlon(lat: float, lon: float) -> bool:
+    """ArduPilot's check_latlng: |lat| <= 90 and |lon| <= 180 degrees (NaN fails)."""
+    return abs(lat) <= 90.0 and abs(lon) <= 180.0
