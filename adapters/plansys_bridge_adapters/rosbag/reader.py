@@ -70,6 +70,10 @@ _READ_ERRORS: tuple[type[BaseException], ...] = (
     lzma.LZMAError,
     ZstdError,
     RuntimeError,  # lz4 frame errors
+    # A damaged length field (mcap records carry a uint64 size) makes the reader ask
+    # for more bytes than an index can hold (OverflowError) or memory can (MemoryError).
+    OverflowError,
+    MemoryError,
 )
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import shutil
+import struct
 import tracemalloc
 from pathlib import Path
 from typing import Any
@@ -192,6 +193,23 @@ def test_damaged_middle_fails_with_topic_and_last_good_time(
             seen.append(sample.bag_time_ns)
     assert err.value.topic == topic
     assert err.value.timestamp == (seen[-1] if seen else None)
+    assert str(copy) in str(err.value)
+
+
+@pytest.mark.parametrize("length", [2**64 - 1, 2**62], ids=["overflow", "memory"])
+def test_absurd_mcap_record_length_fails_clearly(
+    shared_bags: Path, tmp_path: Path, length: int
+) -> None:
+    """A damaged uint64 record length in the mcap summary is corruption, not a crash."""
+    data = bytearray((shared_bags / NAV2_ODOM[0]).read_bytes())
+    (summary_start,) = struct.unpack_from("<Q", data, len(data) - 37 + 9)
+    assert summary_start, "the test bag has a summary section"
+    struct.pack_into("<Q", data, summary_start + 1, length)  # after the record's opcode
+    copy = tmp_path / NAV2_ODOM[0]
+    copy.write_bytes(bytes(data))
+    with pytest.raises(BagCorruptError) as err, BagReader(copy) as bag:
+        for _ in bag.poses(NAV2_ODOM[1]):
+            pass
     assert str(copy) in str(err.value)
 
 
