@@ -19,11 +19,18 @@ class LinkError(MavlinkError):
 
 
 class CommandRefused(MavlinkError):
-    """The vehicle answered a command with a COMMAND_ACK other than ACCEPTED."""
+    """The vehicle answered a command with a COMMAND_ACK other than ACCEPTED.
 
-    def __init__(self, url: str, command: str, result: str, detail: str = "") -> None:
+    ``attempts`` > 1: the answer is to a repeat sent because no ACK came in time, so
+    the first sending may have been obeyed (its ACK lost) and caused the refusal.
+    """
+
+    def __init__(
+        self, url: str, command: str, result: str, detail: str = "", attempts: int = 1
+    ) -> None:
         self.command = command
         self.result = result
+        self.attempts = attempts
         text = f"{command} refused ({result})"
         if detail:
             text = f"{text}: {detail}"

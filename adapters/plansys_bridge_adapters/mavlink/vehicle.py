@@ -60,6 +60,8 @@ EKF_NEEDED = 0x01 | 0x02 | 0x10 | 0x20
 """EKF_ATTITUDE | EKF_VELOCITY_HORIZ | EKF_POS_HORIZ_ABS | EKF_POS_VERT_ABS."""
 EKF_BAD = 0x80 | 0x400
 """EKF_CONST_POS_MODE | EKF_UNINITIALIZED: no usable position yet."""
+LIFT_OFF_M = 0.5
+"""Climb above the take-off altitude that shows a take-off is under way."""
 ARMING_TEXT_PREFIXES = ("prearm:", "arm:")
 
 DEFAULT_TELEMETRY_HZ: Mapping[str, float] = {
@@ -519,7 +521,9 @@ class MavlinkVehicle:
         tries = self.settings.command_retries if retries is None else retries
         start = self._now()
         result: int | None = None
+        attempts = 0
         for attempt in range(max(1, tries)):
+            attempts = attempt + 1
             fut: asyncio.Future[int] = loop.create_future()
             self._acks[command] = fut
             try:
@@ -549,7 +553,11 @@ class MavlinkVehicle:
             )
         if result != ML.MAV_RESULT_ACCEPTED:
             raise CommandRefused(
-                self.url, name, _enum_name("MAV_RESULT", result), self._texts_since(start)
+                self.url,
+                name,
+                _enum_name("MAV_RESULT", result),
+                self._texts_since(start),
+                attempts=attempts,
             )
 
     def _texts_since(self, start: float) -> str:
@@ -666,9 +674,33 @@ class MavlinkVehicle:
     async def disarm(self) -> None:
         await self.command(ML.MAV_CMD_COMPONENT_ARM_DISARM, 0)
 
-    async def takeoff(self, altitude: float) -> None:
-        """MAV_CMD_NAV_TAKEOFF to ``altitude`` metres above home (copter, GUIDED, armed)."""
-        await self.command(ML.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, altitude)
+    async def takeoff(self, altitude: float, lift_off_timeout: float = 5.0) -> None:
+        """MAV_CMD_NAV_TAKEOFF to ``altitude`` metres above home (copter, GUIDED, armed).
+
+        Take-off is the one command a repeat cannot confirm: when the first ACK is lost,
+        ArduCopter answers the repeat FAILED because the copter has already left the
+        ground (``do_user_takeoff`` wants ``land_complete``). Such a refusal counts as
+        accepted if the copter climbs within ``lift_off_timeout`` seconds.
+        """
+        ground = self.telemetry.position.alt if self.telemetry.position is not None else 0.0
+        try:
+            await self.command(ML.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, altitude)
+        except CommandRefused as exc:
+            if exc.attempts < 2 or exc.result != "MAV_RESULT_FAILED":
+                raise
+            try:
+                await self.wait_for(
+                    lambda: self._climbed_from(ground), lift_off_timeout, "the copter to climb"
+                )
+            except WaitTimeout:
+                raise exc from None
+            log.info(
+                "%s: take-off ACK lost; the repeat was refused but the copter climbs", self.url
+            )
+
+    def _climbed_from(self, ground: float) -> bool:
+        here = self.telemetry.position
+        return self.telemetry.armed and here is not None and here.alt >= ground + LIFT_OFF_M
 
     def send_position_target(self, target: GeoPoint) -> None:
         """SET_POSITION_TARGET_GLOBAL_INT, relative-altitude frame, position only."""

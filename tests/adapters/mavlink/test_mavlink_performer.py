@@ -192,6 +192,21 @@ def test_refused_command_fails_the_action(copter: VehicleDouble) -> None:
     assert out[0].status == f"{copter.url}: MAV_CMD_NAV_TAKEOFF refused (MAV_RESULT_DENIED)"
 
 
+def test_takeoff_whose_ack_is_lost_still_succeeds(copter: VehicleDouble) -> None:
+    """The repeat of an obeyed take-off is refused (already off the ground), as on ArduCopter."""
+    copter.lose_next_ack(ml.MAV_CMD_NAV_TAKEOFF)
+    out: list[ActionOutcome] = []
+
+    async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
+        out.append(await act(hub, "takeoff", "uav1", "pad"))
+
+    run_with([("uav1", copter)], body)
+    assert out[0].success, out[0].status
+    takeoffs = [c for c in copter.sim.commands_seen if c == ml.MAV_CMD_NAV_TAKEOFF]
+    assert len(takeoffs) == 2
+    assert copter.state()["alt"] >= 9.0
+
+
 def test_arming_is_retried_until_accepted() -> None:
     with VehicleDouble("copter", speedup=SPEEDUP, ekf_delay=30.0) as double:
         double.refuse_next(ml.MAV_CMD_COMPONENT_ARM_DISARM, ml.MAV_RESULT_FAILED)

@@ -169,6 +169,10 @@ class VehicleDouble:
         """The next MAV_CMD ``command`` is answered with ``result`` and not obeyed."""
         self._locked(lambda: self.sim.refuse_next(command, result))
 
+    def lose_next_ack(self, command: int) -> None:
+        """The next MAV_CMD ``command`` is obeyed but its COMMAND_ACK never arrives."""
+        self._locked(lambda: self.sim.lose_next_ack(command))
+
     def statustext(self, text: str, severity: int = mavlink2.MAV_SEVERITY_ERROR) -> None:
         """The vehicle sends a STATUSTEXT (e.g. an error a test wants the client to catch)."""
         self._locked(lambda: self.sim.statustext(severity, text))

@@ -148,6 +148,7 @@ class VehicleSim:
         self._last_sent: dict[int, float] = {}
         self._last_heartbeat = -math.inf
         self._refusals: dict[int, int] = {}
+        self._lost_acks: set[int] = set()
         self.link_down_until = -math.inf
         self.commands_seen: list[int] = []
 
@@ -229,7 +230,14 @@ class VehicleSim:
         """Fault: answer the next ``command`` with ``result`` instead of obeying it."""
         self._refusals[command] = result
 
+    def lose_next_ack(self, command: int) -> None:
+        """Fault: obey the next ``command`` but lose its COMMAND_ACK, as a radio can."""
+        self._lost_acks.add(command)
+
     def _ack(self, command: int, result: int) -> None:
+        if command in self._lost_acks:
+            self._lost_acks.discard(command)
+            return
         self._send(self.mav.command_ack_encode(command, result))
 
     def _command(self, command: int, p: tuple[float, ...], frame: int = 0) -> None:
