@@ -180,14 +180,20 @@ def test_lost_heartbeat_fails_the_action(copter: VehicleDouble) -> None:
     assert flight.status.endswith("(limit 1 s)")
 
 
-def test_refused_command_fails_the_action(copter: VehicleDouble) -> None:
-    copter.refuse_next(ml.MAV_CMD_NAV_TAKEOFF, ml.MAV_RESULT_DENIED)
+def take_off(double: VehicleDouble) -> ActionOutcome:
+    """Run ``(takeoff uav1 pad)`` with a performer on ``double``; its outcome."""
     out: list[ActionOutcome] = []
 
     async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
         out.append(await act(hub, "takeoff", "uav1", "pad"))
 
-    run_with([("uav1", copter)], body)
+    run_with([("uav1", double)], body)
+    return out[0]
+
+
+def test_refused_command_fails_the_action(copter: VehicleDouble) -> None:
+    copter.refuse_next(ml.MAV_CMD_NAV_TAKEOFF, ml.MAV_RESULT_DENIED)
+    out = [take_off(copter)]
     assert not out[0].success
     assert out[0].status == f"{copter.url}: MAV_CMD_NAV_TAKEOFF refused (MAV_RESULT_DENIED)"
 
@@ -195,13 +201,8 @@ def test_refused_command_fails_the_action(copter: VehicleDouble) -> None:
 def test_takeoff_whose_ack_is_lost_still_succeeds(copter: VehicleDouble) -> None:
     """The repeat of an obeyed take-off is refused (already off the ground), as on ArduCopter."""
     copter.lose_next_ack(ml.MAV_CMD_NAV_TAKEOFF)
-    out: list[ActionOutcome] = []
-
-    async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
-        out.append(await act(hub, "takeoff", "uav1", "pad"))
-
-    run_with([("uav1", copter)], body)
-    assert out[0].success, out[0].status
+    outcome = take_off(copter)
+    assert outcome.success, outcome.status
     takeoffs = [c for c in copter.sim.commands_seen if c == ml.MAV_CMD_NAV_TAKEOFF]
     assert len(takeoffs) == 2
     assert copter.state()["alt"] >= 9.0
@@ -229,13 +230,8 @@ def test_guided_refused_before_the_ekf_is_set_after_it() -> None:
     with VehicleDouble(
         "copter", speedup=SPEEDUP, ekf_delay=20.0, position_modes_need_ekf=True
     ) as double:
-        out: list[ActionOutcome] = []
-
-        async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
-            out.append(await act(hub, "takeoff", "uav1", "pad"))
-
-        run_with([("uav1", double)], body)
-        assert out[0].success, out[0].status
+        outcome = take_off(double)
+        assert outcome.success, outcome.status
         modes = [c for c in double.sim.commands_seen if c == ml.MAV_CMD_DO_SET_MODE]
         assert len(modes) == 2  # refused before the EKF, accepted after
 
