@@ -33,6 +33,7 @@ from plansys_bridge.performers.base import ActionPerformer, PerformerContext
 from plansys_bridge.performers.registry import performers_from_config
 from plansys_bridge.planning.plan import Plan
 from plansys_bridge.planning.planner import Planner
+from plansys_bridge.textfile import read_text
 
 __all__ = [
     "MissionReport",
@@ -112,11 +113,7 @@ def build_knowledge(mission: MissionConfig, domain: Domain) -> ProblemExpert:
         if mission.problem is not None:
             path = mission.resolve(mission.problem)
             with _keyed(mission, "problem"):
-                try:
-                    text = path.read_text(encoding="utf-8")
-                except OSError as exc:
-                    raise ConfigError(f"cannot read {path}: {exc.strerror}") from exc
-                knowledge.load_problem(text, filename=str(path))
+                knowledge.load_problem(read_text(path, "problem file"), filename=str(path))
         for name, type_name in mission.knowledge.instances.items():
             with _keyed(mission, f"knowledge.instances.{name}"):
                 knowledge.add_instance(name, type_name)

@@ -18,6 +18,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.execution.options import ExecutorOptions
+from plansys_bridge.textfile import TextFileError, read_text
 
 
 class _Strict(BaseModel):
@@ -198,9 +199,9 @@ def load_mission(path: str | Path) -> MissionConfig:
     """Read and validate a mission YAML file."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(f"cannot read mission file: {exc.strerror}", file=str(p)) from exc
+        text = read_text(p, "mission file")
+    except TextFileError as exc:
+        raise ConfigError(exc.reason, file=str(exc.location or p)) from exc
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as exc:

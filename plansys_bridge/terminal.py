@@ -33,6 +33,7 @@ from plansys_bridge.knowledge.domain_expert import DomainExpert
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.pddl.model import Action, AnyAction, Domain, Problem, TypedName
 from plansys_bridge.planning.plan import Plan, PlanStep, format_plan, parse_action_text, parse_plan
+from plansys_bridge.textfile import read_text
 
 __all__ = ["HELP", "Terminal", "TerminalError"]
 
@@ -162,7 +163,7 @@ class Terminal:
         file = self._resolve(path)
         if file in self._sourcing:
             raise TerminalError(f"{file}: sourced recursively")
-        lines = file.read_text(encoding="utf-8").splitlines()
+        lines = read_text(file, "command file").splitlines()
         outputs: list[str] = []
         self._sourcing.append(file)
         try:
@@ -395,7 +396,7 @@ class Terminal:
             if len(words) < 2:
                 raise TerminalError("usage: run plan-file FILE")
             file = self._resolve(_unquote(rest.split(None, 1)[1]))
-            return self._execute(parse_plan(file.read_text(encoding="utf-8"), str(file)))
+            return self._execute(parse_plan(read_text(file, "plan file"), str(file)))
         action_text = rest.split(None, 1)[1] if kind == "action" and len(words) > 1 else rest
         if not action_text.startswith("("):
             raise TerminalError(

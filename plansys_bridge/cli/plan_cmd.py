@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from plansys_bridge.errors import ConfigError
+from plansys_bridge.textfile import TextFileError, read_text
 
 EXIT_OK = 0
 EXIT_NO_PLAN = 1
@@ -75,12 +76,12 @@ def run(args: argparse.Namespace) -> int:
     from plansys_bridge.planning.schedule import reschedule_report
 
     *domain_files, problem_file = args.files
-    try:
-        problem_text = Path(problem_file).read_text(encoding="utf-8")
-    except OSError as exc:
-        print(f"error: cannot read problem file {problem_file}: {exc.strerror}", file=sys.stderr)
-        return EXIT_BAD_INPUT
     domain = parse_domain_files(domain_files)
+    try:
+        problem_text = read_text(problem_file, "problem file")
+    except TextFileError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     problem = parse_problem(problem_text, domain, problem_file)
 
     options: dict[str, Any] = {}

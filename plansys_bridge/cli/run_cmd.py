@@ -10,6 +10,7 @@ from typing import Any
 from plansys_bridge.mission import MissionReport, run_mission
 from plansys_bridge.mission_config import load_mission
 from plansys_bridge.planning.plan import Plan, parse_plan
+from plansys_bridge.textfile import read_text
 
 
 def register(sub: Any) -> None:
@@ -48,8 +49,7 @@ def handle(args: argparse.Namespace) -> int:
         mission = mission.model_copy(update=updates)
     plan: Plan | None = None
     if args.plan:
-        with open(args.plan, encoding="utf-8") as f:
-            plan = parse_plan(f.read(), args.plan)
+        plan = parse_plan(read_text(args.plan, "plan file"), args.plan)
     quiet = args.quiet or args.json
     report = run_mission(
         mission,

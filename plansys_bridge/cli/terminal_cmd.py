@@ -16,8 +16,9 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable
-from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
+
+from plansys_bridge.textfile import TextFileError, read_text
 
 if TYPE_CHECKING:
     from plansys_bridge.knowledge.problem_expert import ProblemExpert
@@ -107,13 +108,12 @@ def run(args: argparse.Namespace, stdin: TextIO | None = None, stdout: TextIO | 
         domain_expert = DomainExpert.from_files(args.domains)
         problem_expert = ProblemExpert(domain_expert)
     if args.problem:
-        path = Path(args.problem)
         try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            print(f"error: {path}: {exc.strerror}", file=sys.stderr)
+            text = read_text(args.problem, "problem file")
+        except TextFileError as exc:
+            print(f"error: {exc}", file=sys.stderr)
             return EXIT_BAD_INPUT
-        problem_expert.load_problem(text, filename=str(path))
+        problem_expert.load_problem(text, filename=args.problem)
 
     terminal = Terminal(
         domain_expert,
@@ -124,7 +124,11 @@ def run(args: argparse.Namespace, stdin: TextIO | None = None, stdout: TextIO | 
         actors=actors,
     )
     for file in args.source or ():
-        result = terminal.source(file)
+        try:
+            result = terminal.source(file)
+        except TextFileError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
         if result:
             out.write(result + "\n")
     if not terminal.finished:

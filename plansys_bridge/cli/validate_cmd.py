@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 from typing import Any
 
 from plansys_bridge.errors import PlansysBridgeError
@@ -22,6 +21,7 @@ from plansys_bridge.pddl.model import (
     DurativeAction,
     Problem,
 )
+from plansys_bridge.textfile import read_text
 
 EXIT_OK = 0
 EXIT_INVALID_PLAN = 1
@@ -77,17 +77,6 @@ def problem_summary(problem: Problem) -> str:
     return f"problem {problem.name}: " + ", ".join(parts)
 
 
-def _read(path: str) -> str:
-    try:
-        return Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise _InputError(f"{path}: cannot read: {exc.strerror}") from exc
-
-
-class _InputError(PlansysBridgeError):
-    """A file given on the command line cannot be read."""
-
-
 def run(args: argparse.Namespace) -> int:
     from plansys_bridge.pddl.parser import parse_domain_files, parse_problem
 
@@ -99,14 +88,14 @@ def run(args: argparse.Namespace) -> int:
         print(domain_summary(domain))
         if not args.problem:
             return EXIT_OK
-        problem = parse_problem(_read(args.problem), domain, args.problem)
+        problem = parse_problem(read_text(args.problem, "problem file"), domain, args.problem)
         print(problem_summary(problem))
         if not args.plan:
             return EXIT_OK
         from plansys_bridge.planning.plan import parse_plan
         from plansys_bridge.planning.validation import validate_plan
 
-        plan = parse_plan(_read(args.plan), args.plan)
+        plan = parse_plan(read_text(args.plan, "plan file"), args.plan)
         report = validate_plan(domain, problem, plan)
     except PlansysBridgeError as exc:
         print(f"error: {exc}", file=sys.stderr)

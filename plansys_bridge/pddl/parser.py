@@ -37,6 +37,7 @@ from plansys_bridge.pddl.model import (
     Problem,
     is_variable,
 )
+from plansys_bridge.textfile import TextFileError, read_text
 
 __all__ = [
     "parse_atom",
@@ -221,11 +222,10 @@ def parse_domain_files(paths: Sequence[str | Path]) -> Domain:
     for path in paths:
         name = str(path)
         try:
-            text = Path(path).read_text(encoding="utf-8")
-        except OSError as exc:
-            raise PddlSyntaxError(
-                f"cannot read domain file: {exc.strerror}", SourceLocation(name, 1, 1)
-            ) from exc
+            text = read_text(path, "domain file")
+        except TextFileError as exc:
+            location = exc.location or SourceLocation(name, 1, 1)
+            raise PddlSyntaxError(exc.reason, location) from exc
         sources[name] = text
         domains.append(_parse(text, "domain", name))
     merged = merge_domains(domains, sources)

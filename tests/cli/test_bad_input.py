@@ -1,0 +1,113 @@
+"""The command line given bad input: one clear line naming the place, a non-zero exit.
+
+Each case is what an engineer at a robot gets wrong: a binary file where a text file
+belongs, a directory, a missing file, a typo in a mission file, a nonsense number.
+The answer is always ``error: <place>: <reason>`` on stderr and exit status 2, never
+a traceback.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from plansys_bridge.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+DOMAIN = str(ROOT / "configs" / "pddl" / "flat_navigation.pddl")
+
+PROBLEM = """\
+(define (problem p) (:domain flat_navigation)
+  (:objects tiago - robot kitchen hall - room)
+  (:init (robot_at tiago kitchen) (connected kitchen hall) (= (travel_time kitchen hall) 5))
+  (:goal (and (visited tiago hall))))
+"""
+
+MISSION = f"""\
+name: qa
+domain: {DOMAIN}
+knowledge:
+  instances: {{tiago: robot, kitchen: room, hall: room}}
+  predicates: ["(robot_at tiago kitchen)", "(connected kitchen hall)"]
+  functions: ["(= (travel_time kitchen hall) 5)"]
+goal: (visited tiago hall)
+performers:
+  - {{kind: simulated, name: nav, actions: {{move: [tiago]}}}}
+clock: {{kind: virtual}}
+"""
+
+BINARY = b"\x00\x89PNG\r\n\x1a\n" + bytes(range(256))
+
+
+def error_line(capsys: pytest.CaptureFixture[str]) -> str:
+    """The one ``error:`` line on stderr (and no traceback)."""
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    lines = [line for line in err.splitlines() if line.startswith("error: ")]
+    assert len(lines) == 1, err
+    return lines[0]
+
+
+@pytest.fixture()
+def files(tmp_path: Path) -> dict[str, str]:
+    (tmp_path / "problem.pddl").write_text(PROBLEM)
+    (tmp_path / "mission.yaml").write_text(MISSION)
+    (tmp_path / "binary.bin").write_bytes(BINARY)
+    (tmp_path / "late.pddl").write_bytes(b"(define (domain x)\n  (:requirements \xff))\n")
+    (tmp_path / "folder").mkdir()
+    return {
+        name.split(".")[0]: str(tmp_path / name)
+        for name in ("problem.pddl", "mission.yaml", "binary.bin", "late.pddl", "folder")
+    }
+
+
+# ------------------------------------------------------------------ unreadable files
+
+
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["validate", "{binary}"], "binary.bin:1:2: cannot read domain file: not UTF-8"),
+        (["validate", "{late}"], "late.pddl:2:18: cannot read domain file: not UTF-8"),
+        (["validate", DOMAIN, "--problem", "{binary}"], "binary.bin:1:2: cannot read problem"),
+        (
+            ["validate", DOMAIN, "--problem", "{problem}", "--plan", "{binary}"],
+            "binary.bin:1:2: cannot read plan file",
+        ),
+        (["plan", DOMAIN, "{binary}"], "binary.bin:1:2: cannot read problem file"),
+        (["plan", "{binary}", "{problem}"], "binary.bin:1:2: cannot read domain file"),
+        (["run", "{binary}"], "binary.bin:1:2: cannot read mission file"),
+        (["run", "{mission}", "--plan", "{binary}"], "binary.bin:1:2: cannot read plan"),
+        (["run", "{mission}", "--plan", "{folder}"], "folder: cannot read plan file: Is a"),
+        (["run", "{mission}", "--plan", "missing.plan"], "missing.plan: cannot read plan"),
+        (["terminal", DOMAIN, "--problem", "{binary}"], "binary.bin:1:2: cannot read problem"),
+        (["terminal", DOMAIN, "--source", "{binary}"], "binary.bin:1:2: cannot read command"),
+        (["terminal", DOMAIN, "--source", "{folder}"], "folder: cannot read command file: Is a"),
+        (["terminal", DOMAIN, "--source", "missing.txt"], "missing.txt: cannot read command file"),
+    ],
+)
+def test_unreadable_file_is_one_line_naming_it(
+    argv: list[str],
+    expected: str,
+    files: dict[str, str],
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr("sys.stdin", open("/dev/null"))  # noqa: SIM115 (closed by pytest)
+    assert main([a.format(**files) for a in argv]) == 2
+    assert expected in error_line(capsys)
+
+
+def test_terminal_source_command_names_a_binary_file(
+    files: dict[str, str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from plansys_bridge.knowledge.domain_expert import DomainExpert
+    from plansys_bridge.knowledge.problem_expert import ProblemExpert
+    from plansys_bridge.terminal import Terminal
+
+    domain = DomainExpert.from_files([DOMAIN])
+    terminal = Terminal(domain, ProblemExpert(domain))
+    result = terminal.execute_line(f"source {files['binary']}")
+    assert result.startswith("error: ")
+    assert "binary.bin:1:2: cannot read command file: not UTF-8" in result
