@@ -181,6 +181,17 @@ class CanBusClient:
         self._kind = "notifier" if kind == "auto" else kind
         self._closing = False
         self._bus = self._create_bus()
+        if self.config.interface == "socketcan" and self.config.bitrate is not None:
+            # python-can's SocketcanBus swallows ``bitrate`` without a word: the kernel
+            # interface keeps the rate it was brought up with.
+            _LOG.warning(
+                "%s: bitrate %d is not applied by socketcan; the interface runs at the rate "
+                "set with `ip link set %s type can bitrate N` (check `ip -details link show %s`)",
+                self.config.describe(),
+                self.config.bitrate,
+                self.config.channel,
+                self.config.channel,
+            )
         self._start_reader(self._bus)
 
     def _create_bus(self) -> can.BusABC:

@@ -264,6 +264,25 @@ def test_file_descriptor_reader_turns_a_failing_socket_into_one_bus_error() -> N
     run(main(), VirtualClock())
 
 
+def test_socketcan_bitrate_is_not_silently_assumed(caplog: pytest.LogCaptureFixture) -> None:
+    """SocketcanBus ignores ``bitrate``; the client says the kernel's rate applies."""
+
+    def factory(**kwargs: Any) -> can.BusABC:
+        return SocketPairBus(kwargs["channel"])
+
+    async def main() -> None:
+        config = BusConfig(interface="socketcan", channel="can0", bitrate=500_000, reader="poll")
+        client = CanBusClient(config, DBC, Sink(), bus_factory=factory)
+        with caplog.at_level(logging.WARNING):
+            await client.open()
+        await client.close()
+
+    run(main(), VirtualClock())
+    [warning] = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert "socketcan:can0: bitrate 500000 is not applied" in warning
+    assert "ip link set can0 type can bitrate" in warning
+
+
 def test_unknown_interface_is_a_clear_error() -> None:
     async def main() -> None:
         client = CanBusClient(BusConfig(interface="nosuchcan", channel="can0"), DBC, Sink())
