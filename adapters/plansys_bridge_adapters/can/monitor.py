@@ -43,10 +43,33 @@ _ERROR_CLASSES = (
     (0x100, "controller restarted"),
 )
 
+_CAN_ERR_CRTL = 0x004
+# Controller status in data[1] of a "controller problem" frame (linux/can/error.h):
+# which one it is matters (warning levels and error-passive versus back to active).
+_CONTROLLER_STATES = (
+    (0x01, "RX overflow"),
+    (0x02, "TX overflow"),
+    (0x04, "RX error warning"),
+    (0x08, "TX error warning"),
+    (0x10, "RX error-passive"),
+    (0x20, "TX error-passive"),
+    (0x40, "back to error-active"),
+)
+
 
 def describe_error_frame(msg: can.Message) -> str:
-    """Name the error classes of a CAN error frame (``bus-off, no ACK``)."""
-    names = [name for bit, name in _ERROR_CLASSES if msg.arbitration_id & bit]
+    """Name the error classes of a CAN error frame (``bus-off, no ACK``).
+
+    A controller problem also says which (``controller problem (RX error-passive)``).
+    """
+    names = []
+    for bit, name in _ERROR_CLASSES:
+        if msg.arbitration_id & bit:
+            if bit == _CAN_ERR_CRTL and len(msg.data) > 1:
+                states = [text for flag, text in _CONTROLLER_STATES if msg.data[1] & flag]
+                if states:
+                    name = f"{name} ({', '.join(states)})"
+            names.append(name)
     return ", ".join(names) if names else f"error class 0x{msg.arbitration_id:X}"
 
 

@@ -305,6 +305,13 @@ def test_frames_are_described_for_logs() -> None:
     assert describe_error_frame(can.Message(arbitration_id=0x0A0, is_error_frame=True)) == (
         "no ACK on transmission, bus error"
     )
+    # SocketCAN puts the controller's state in data[1] (linux/can/error.h, CAN_ERR_CRTL_*)
+    passive = can.Message(arbitration_id=0x004, is_error_frame=True, data=b"\x00\x30" + bytes(6))
+    assert describe_error_frame(passive) == (
+        "controller problem (RX error-passive, TX error-passive)"
+    )
+    bare = can.Message(arbitration_id=0x004, is_error_frame=True)
+    assert describe_error_frame(bare) == "controller problem"
 
 
 @settings(max_examples=300, deadline=None)
