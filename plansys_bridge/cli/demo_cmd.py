@@ -31,7 +31,7 @@ def handle(args: argparse.Namespace) -> int:
     argv = ["run", str(default_missions_dir() / DEMOS[args.name])]
     if args.clock:
         argv += ["--clock", args.clock]
-    if args.time_scale:
+    if args.time_scale is not None:
         argv += ["--time-scale", str(args.time_scale)]
     if args.json:
         argv.append("--json")

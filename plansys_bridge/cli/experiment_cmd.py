@@ -7,6 +7,7 @@ import json
 import sys
 from typing import Any
 
+from plansys_bridge.cli.options import check_at_least, check_non_negative, check_positive
 from plansys_bridge.execution.results import ExecutionResult
 from plansys_bridge.experiments.cooking import PAPER_EFFICIENCY, CookingConfig, run_cooking
 from plansys_bridge.performers.simulated import FaultPlan
@@ -39,9 +40,10 @@ def register(sub: Any) -> None:
 
 
 def handle(args: argparse.Namespace) -> int:
-    if args.time_scale <= 0:
-        print("error: --time-scale must be > 0", file=sys.stderr)
-        return 2
+    check_positive(args.time_scale, "--time-scale")
+    check_positive(args.hours, "--hours")
+    check_at_least(args.plans, 1, "--plans")
+    check_non_negative(args.battery_drops, "--battery-drops")
     faults = FaultPlan()
     unresponsive = 0.0
     if args.faults:

@@ -16,6 +16,7 @@ import logging
 import signal
 from typing import Any
 
+from plansys_bridge.cli.options import check_positive
 from plansys_bridge.clock import Clock, run
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.hub.hub import Hub
@@ -42,6 +43,8 @@ def register(sub: Any) -> None:
 
 def handle(args: argparse.Namespace) -> int:
     logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING)
+    check_positive(args.time_scale, "--time-scale")
+    check_positive(args.duration, "--duration")
     mission = load_mission(args.mission)
     if mission.transport.kind != "dds":
         raise ConfigError(
@@ -49,13 +52,11 @@ def handle(args: argparse.Namespace) -> int:
             key="transport.kind",
             file=mission.source,
         )
-    if args.time_scale:
+    if args.time_scale is not None:
         clock_config = type(mission.clock).model_validate(
             mission.clock.model_dump() | {"time_scale": args.time_scale}
         )
         mission = mission.model_copy(update={"clock": clock_config})
-    if args.duration is not None and not args.duration > 0:
-        raise ConfigError(f"--duration must be > 0, got {args.duration}", key="--duration")
     clock = make_clock(mission)
     run(_serve(mission, clock, args.duration), clock)
     return 0

@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from plansys_bridge.cli.options import check_at_least, check_non_negative
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.textfile import TextFileError, read_text
 
@@ -90,6 +91,8 @@ def run(args: argparse.Namespace) -> int:
     if args.threads is not None:
         options["threads"] = args.threads
     try:
+        check_non_negative(args.improve, "--improve")
+        check_at_least(args.threads, 1, "--threads")
         planner = Planner(
             args.solver,
             timeout=args.timeout,

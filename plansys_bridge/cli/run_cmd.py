@@ -7,6 +7,8 @@ import json
 import logging
 from typing import Any
 
+from plansys_bridge.cli.options import check_positive
+from plansys_bridge.errors import ConfigError
 from plansys_bridge.mission import MissionReport, run_mission
 from plansys_bridge.mission_config import load_mission
 from plansys_bridge.planning.plan import Plan, parse_plan
@@ -34,13 +36,21 @@ def register(sub: Any) -> None:
 
 def handle(args: argparse.Namespace) -> int:
     logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING)
+    check_positive(args.time_scale, "--time-scale")
     mission = load_mission(args.mission)
     updates: dict[str, Any] = {}
-    if args.clock or args.time_scale:
+    if args.clock or args.time_scale is not None:
         clock = mission.clock.model_dump() | {
-            k: v for k, v in (("kind", args.clock), ("time_scale", args.time_scale)) if v
+            k: v
+            for k, v in (("kind", args.clock), ("time_scale", args.time_scale))
+            if v is not None
         }
         if clock["kind"] == "virtual":
+            if args.time_scale is not None:
+                raise ConfigError(
+                    "applies to the wall clock; the virtual clock skips idle time",
+                    key="--time-scale",
+                )
             clock["time_scale"] = 1.0
         updates["clock"] = type(mission.clock).model_validate(clock)
     if args.record:

@@ -18,6 +18,7 @@ import sys
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, TextIO
 
+from plansys_bridge.cli.options import check_positive
 from plansys_bridge.textfile import TextFileError, read_text
 
 if TYPE_CHECKING:
@@ -79,6 +80,7 @@ def run(args: argparse.Namespace, stdin: TextIO | None = None, stdout: TextIO | 
     from plansys_bridge.knowledge.problem_expert import ProblemExpert
     from plansys_bridge.terminal import Terminal
 
+    check_positive(args.timeout, "--timeout")
     inp = stdin if stdin is not None else sys.stdin
     out = _ErrorCounter(stdout if stdout is not None else sys.stdout)
     if bool(args.domains) == bool(args.mission):

@@ -17,6 +17,7 @@ be used from several threads (the executor plans in a worker thread).
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -42,8 +43,8 @@ class Planner:
     ) -> None:
         if isinstance(solvers, str):
             solvers = [solvers]
-        if timeout <= 0:
-            raise ConfigError(f"timeout must be positive, got {timeout}", key="timeout")
+        if not 0 < timeout < math.inf:
+            raise ConfigError(f"timeout must be positive and finite, got {timeout}", key="timeout")
         self.timeout = float(timeout)
         self.fallback = fallback
         self.validate = validate

@@ -111,3 +111,35 @@ def test_terminal_source_command_names_a_binary_file(
     result = terminal.execute_line(f"source {files['binary']}")
     assert result.startswith("error: ")
     assert "binary.bin:1:2: cannot read command file: not UTF-8" in result
+
+
+# ------------------------------------------------------------------ numeric options
+
+
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["run", "{mission}", "--clock", "wall", "--time-scale", "0"], "--time-scale: must be"),
+        (["run", "{mission}", "--clock", "wall", "--time-scale", "-1"], "--time-scale: must be"),
+        (["run", "{mission}", "--clock", "wall", "--time-scale", "nan"], "--time-scale: must be"),
+        (["run", "{mission}", "--clock", "wall", "--time-scale", "inf"], "--time-scale: must be"),
+        (["run", "{mission}", "--time-scale", "0.5"], "--time-scale: applies to the wall clock"),
+        (["demo", "--clock", "virtual", "--time-scale", "0"], "--time-scale: must be"),
+        (["performers", "{mission}", "--time-scale", "-1"], "--time-scale: must be"),
+        (["performers", "{mission}", "--duration", "0"], "--duration: must be"),
+        (["plan", DOMAIN, "{problem}", "--timeout", "nan"], "timeout must be positive and finite"),
+        (["plan", DOMAIN, "{problem}", "--timeout", "inf"], "timeout must be positive and finite"),
+        (["plan", DOMAIN, "{problem}", "--threads", "-2"], "--threads: must be >= 1, got -2"),
+        (["plan", DOMAIN, "{problem}", "--improve", "-1"], "--improve: must be a finite number"),
+        (["terminal", DOMAIN, "--timeout", "nan"], "--timeout: must be a finite number > 0"),
+        (["experiment", "cooking", "--hours", "inf"], "--hours: must be a finite number > 0"),
+        (["experiment", "cooking", "--plans", "0"], "--plans: must be >= 1, got 0"),
+        (["experiment", "cooking", "--battery-drops", "nan"], "--battery-drops: must be"),
+        (["experiment", "cooking", "--clock", "wall", "--time-scale", "inf"], "--time-scale"),
+    ],
+)
+def test_nonsense_number_is_refused_naming_the_option(
+    argv: list[str], expected: str, files: dict[str, str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main([a.format(**files) for a in argv]) == 2
+    assert expected in error_line(capsys)

@@ -11,6 +11,7 @@ whose message says why, in the solver's own words.
 
 from __future__ import annotations
 
+import math
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
@@ -128,8 +129,8 @@ class Solver(ABC):
                     f"which {self.name} does not support",
                 )
             )
-        if timeout <= 0:
-            raise ConfigError(f"timeout must be positive, got {timeout}", key="timeout")
+        if not 0 < timeout < math.inf:
+            raise ConfigError(f"timeout must be positive and finite, got {timeout}", key="timeout")
         try:
             task = PlanningTask.from_model(domain, problem)
             outcome = self._solve(task, timeout)
