@@ -671,13 +671,24 @@ class MavlinkVehicle:
                 seen.append(entry.text)
         return "; ".join(seen[-3:])
 
-    async def disarm(self) -> None:
-        await self.command(ML.MAV_CMD_COMPONENT_ARM_DISARM, 0)
+    async def disarm(self, confirm_timeout: float = 3.0) -> None:
+        """Disarm (on the ground).
+
+        ArduPilot answers FAILED to a disarm when already disarmed, so a repeat sent
+        after a lost ACK is refused although the first one worked: then a HEARTBEAT
+        showing the vehicle disarmed within ``confirm_timeout`` seconds is the answer.
+        """
+        try:
+            await self.command(ML.MAV_CMD_COMPONENT_ARM_DISARM, 0)
+        except CommandRefused as exc:
+            await self._done_despite_refused_repeat(
+                exc, lambda: not self.telemetry.armed, confirm_timeout, "disarmed"
+            )
 
     async def takeoff(self, altitude: float, lift_off_timeout: float = 5.0) -> None:
         """MAV_CMD_NAV_TAKEOFF to ``altitude`` metres above home (copter, GUIDED, armed).
 
-        Take-off is the one command a repeat cannot confirm: when the first ACK is lost,
+        A repeat cannot confirm a take-off: when the first ACK is lost,
         ArduCopter answers the repeat FAILED because the copter has already left the
         ground (``do_user_takeoff`` wants ``land_complete``). Such a refusal counts as
         accepted if the copter climbs within ``lift_off_timeout`` seconds.
@@ -686,17 +697,24 @@ class MavlinkVehicle:
         try:
             await self.command(ML.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, altitude)
         except CommandRefused as exc:
-            if exc.attempts < 2 or exc.result != "MAV_RESULT_FAILED":
-                raise
-            try:
-                await self.wait_for(
-                    lambda: self._climbed_from(ground), lift_off_timeout, "the copter to climb"
-                )
-            except WaitTimeout:
-                raise exc from None
+            await self._done_despite_refused_repeat(
+                exc, lambda: self._climbed_from(ground), lift_off_timeout, "the copter to climb"
+            )
             log.info(
                 "%s: take-off ACK lost; the repeat was refused but the copter climbs", self.url
             )
+
+    async def _done_despite_refused_repeat(
+        self, exc: CommandRefused, done: Callable[[], bool], timeout: float, what: str
+    ) -> None:
+        """Re-raise ``exc`` unless it answers a repeat (the first ACK was lost) with
+        FAILED and ``done()`` comes true within ``timeout``: the first sending worked."""
+        if exc.attempts < 2 or exc.result != "MAV_RESULT_FAILED":
+            raise exc
+        try:
+            await self.wait_for(done, timeout, what)
+        except WaitTimeout:
+            raise exc from None
 
     def _climbed_from(self, ground: float) -> bool:
         here = self.telemetry.position

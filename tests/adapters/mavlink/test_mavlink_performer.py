@@ -208,6 +208,21 @@ def test_takeoff_whose_ack_is_lost_still_succeeds(copter: VehicleDouble) -> None
     assert copter.state()["alt"] >= 9.0
 
 
+def test_rover_stop_whose_disarm_ack_is_lost_still_succeeds(rover: VehicleDouble) -> None:
+    """ArduRover answers a repeated disarm FAILED (already disarmed); the stop still succeeds."""
+    out: list[ActionOutcome] = []
+
+    async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
+        out.append(await act(hub, "drive", "ugv1", "yard", "gate"))
+        rover.lose_next_ack(ml.MAV_CMD_COMPONENT_ARM_DISARM)
+        out.append(await act(hub, "land", "ugv1", "gate"))
+
+    run_with([("ugv1", rover)], body)
+    assert [o.success for o in out] == [True, True], [o.status for o in out]
+    assert out[1].status == "stopped and disarmed"
+    assert not rover.state()["armed"]
+
+
 def test_arming_is_retried_until_accepted() -> None:
     with VehicleDouble("copter", speedup=SPEEDUP, ekf_delay=30.0) as double:
         double.refuse_next(ml.MAV_CMD_COMPONENT_ARM_DISARM, ml.MAV_RESULT_FAILED)

@@ -315,7 +315,7 @@ class VehicleSim:
     def _arm(self, arm: bool, force: bool) -> int:
         if not arm:
             if not self.armed:
-                return ML.MAV_RESULT_ACCEPTED
+                return ML.MAV_RESULT_FAILED  # AP_Arming::disarm: "already disarmed" is false
             if self.model == "copter" and not self.landed and not force:
                 self.statustext(ML.MAV_SEVERITY_CRITICAL, "Disarm: not landed")
                 return ML.MAV_RESULT_FAILED
