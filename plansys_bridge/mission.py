@@ -12,7 +12,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -39,6 +39,7 @@ __all__ = [
     "MissionReport",
     "MissionSession",
     "build_knowledge",
+    "in_mission_file",
     "make_clock",
     "make_transport",
     "run_mission",
@@ -106,7 +107,10 @@ def build_knowledge(mission: MissionConfig, domain: Domain) -> ProblemExpert:
     """The problem expert with the mission's problem file and inline knowledge.
 
     All of it goes in one transaction: a bad entry leaves nothing half-loaded, and
-    the error names the entry's key in the mission file.
+    the error names the entry's key in the mission file. The mission's other
+    references to the domain and the knowledge are checked here too, before anything
+    starts: each performer's actions must be actions of the domain, and each timed
+    event must be a change the knowledge would accept (it is tried, then undone).
     """
     knowledge = ProblemExpert(domain)
     with knowledge.transaction():
@@ -126,7 +130,76 @@ def build_knowledge(mission: MissionConfig, domain: Domain) -> ProblemExpert:
         if mission.goal is not None:
             with _keyed(mission, "goal"):
                 knowledge.set_goal(mission.goal)
+        _check_performer_actions(mission, domain)
+        _rehearse_events(mission, knowledge)
     return knowledge
+
+
+def _check_performer_actions(mission: MissionConfig, domain: Domain) -> None:
+    """A performer offering an action the domain lacks is a typo, not a capability:
+    no plan ever asks for it, and the action it was meant for finds no performer."""
+    known = {a.name for a in domain.actions}
+    for i, entry in enumerate(mission.performers):
+        actions = getattr(entry, "actions", None)
+        names = list(actions) if isinstance(actions, Mapping | list | tuple) else []
+        for name in names:
+            if isinstance(name, str) and name.strip().lower() not in known:
+                raise ConfigError(
+                    f"domain {domain.name} has no action {name!r} "
+                    f"(its actions: {', '.join(sorted(known)) or 'none'})",
+                    key=f"performers[{i}].actions.{name}",
+                    file=mission.source,
+                )
+
+
+class _Rehearsed(Exception):
+    """Ends the trial run of the events so that the transaction undoes it."""
+
+
+def _rehearse_events(mission: MissionConfig, knowledge: ProblemExpert) -> None:
+    """Apply every timed event now and undo them: one the knowledge would refuse at
+    its time (unknown object or predicate, a typo) is an error at load instead."""
+    if not mission.events:
+        return
+    try:
+        with knowledge.transaction():
+            for i, event in enumerate(mission.events):
+                with _keyed(mission, f"events[{i}].{_event_key(event)}"):
+                    _apply_event(knowledge, event)
+            raise _Rehearsed
+    except _Rehearsed:
+        pass
+
+
+def _event_key(event: EventConfig) -> str:
+    return next(
+        k for k in ("add_predicate", "remove_predicate", "set_function") if getattr(event, k)
+    )
+
+
+def _apply_event(knowledge: ProblemExpert, event: EventConfig) -> str:
+    """Make the event's change; returns it as text (``+(p a)``, ``-(p a)``, ``(= (f) 1)``)."""
+    if event.add_predicate:
+        knowledge.add_predicate(event.add_predicate)
+        return f"+{event.add_predicate}"
+    if event.remove_predicate:
+        knowledge.remove_predicate(event.remove_predicate)
+        return f"-{event.remove_predicate}"
+    knowledge.set_function(event.set_function or "")
+    return f"{event.set_function}"
+
+
+@contextlib.contextmanager
+def in_mission_file(mission: MissionConfig) -> Iterator[None]:
+    """Add the mission file's name to a ConfigError that names only the key (the
+    performer plugins check their settings knowing the key, not the file)."""
+    try:
+        yield
+    except ConfigError as exc:
+        if exc.file is not None:
+            raise
+        message = str(exc).removeprefix(f"{exc.key}: ") if exc.key else str(exc)
+        raise ConfigError(message, key=exc.key, file=mission.source) from exc
 
 
 @contextlib.contextmanager
@@ -192,7 +265,8 @@ class MissionSession:
             )
             entries = [p.model_dump() | self._overrides for p in self.mission.performers]
             if self.local_performers:
-                self.performers = performers_from_config(entries, context)
+                with in_mission_file(self.mission):
+                    self.performers = performers_from_config(entries, context)
             for performer in self.performers:
                 await performer.start()
             if not self.local_performers:
@@ -244,15 +318,7 @@ class MissionSession:
 
     def apply_event(self, event: EventConfig) -> None:
         try:
-            if event.add_predicate:
-                self.knowledge.add_predicate(event.add_predicate)
-                text = f"+{event.add_predicate}"
-            elif event.remove_predicate:
-                self.knowledge.remove_predicate(event.remove_predicate)
-                text = f"-{event.remove_predicate}"
-            else:
-                self.knowledge.set_function(event.set_function or "")
-                text = f"{event.set_function}"
+            text = _apply_event(self.knowledge, event)
         except PlansysBridgeError as exc:
             self._say(f"[{event.at:8.1f}] event refused: {exc}")
             return

@@ -20,7 +20,7 @@ from plansys_bridge.cli.options import check_positive
 from plansys_bridge.clock import Clock, run
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.hub.hub import Hub
-from plansys_bridge.mission import build_knowledge, make_clock, make_transport
+from plansys_bridge.mission import build_knowledge, in_mission_file, make_clock, make_transport
 from plansys_bridge.mission_config import MissionConfig, load_mission
 from plansys_bridge.pddl.parser import parse_domain_files
 from plansys_bridge.performers.base import ActionPerformer, PerformerContext
@@ -58,7 +58,8 @@ def handle(args: argparse.Namespace) -> int:
         )
         mission = mission.model_copy(update={"clock": clock_config})
     clock = make_clock(mission)
-    run(_serve(mission, clock, args.duration), clock)
+    with in_mission_file(mission):
+        run(_serve(mission, clock, args.duration), clock)
     return 0
 
 

@@ -143,3 +143,93 @@ def test_nonsense_number_is_refused_naming_the_option(
 ) -> None:
     assert main([a.format(**files) for a in argv]) == 2
     assert expected in error_line(capsys)
+
+
+# ------------------------------------------------------------------ mission files
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "expected"),
+    [
+        (
+            "kind: simulated",
+            "kind: simulatd",
+            "mission.yaml:performers[0].kind: unknown performer kind 'simulatd'",
+        ),
+        (
+            "actions: {move: [tiago]}",
+            "actions: {move: [tiago]}, duratons: {move: 2}",
+            "mission.yaml:performers[0].duratons: unknown key",
+        ),
+        (
+            "actions: {move: [tiago]}",
+            "actions: {mvoe: [tiago]}",
+            "mission.yaml:performers[0].actions.mvoe: domain flat_navigation has no action 'mvoe'",
+        ),
+        (
+            "clock: {kind: virtual}",
+            "clock: {kind: virtual}\nevents: [{at: 2, add_predicate: (connected hall mars)}]",
+            "mission.yaml:events[0].add_predicate: <atom>:1:17: unknown object 'mars'",
+        ),
+        (
+            "clock: {kind: virtual}",
+            "clock: {kind: virtual}\nevents: [{at: 2, set_function: (= (travel_tim hall) 3)}]",
+            "mission.yaml:events[0].set_function: <fluent>:1:5: unknown function 'travel_tim'",
+        ),
+        (
+            "clock: {kind: virtual}",
+            "clock: {kind: virtual}\nname: again",
+            "mission.yaml:11:1: not valid YAML: duplicate key 'name'",
+        ),
+        (
+            "actions: {move: [tiago]}",
+            "actions: {move: [tiago], move: []}",
+            "mission.yaml:9:59: not valid YAML: duplicate key 'move'",
+        ),
+    ],
+)
+def test_mission_mistake_names_file_and_key(
+    old: str,
+    new: str,
+    expected: str,
+    files: dict[str, str],
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    path = Path(files["mission"])
+    path.write_text(MISSION.replace(old, new))
+    assert main(["run", str(path)]) == 2
+    assert expected in error_line(capsys)
+
+
+def test_mission_events_are_checked_without_changing_the_knowledge(tmp_path: Path) -> None:
+    from plansys_bridge.mission import build_knowledge
+    from plansys_bridge.mission_config import load_mission
+    from plansys_bridge.pddl.parser import parse_domain_files
+
+    path = tmp_path / "mission.yaml"
+    path.write_text(
+        MISSION
+        + "events:\n"
+        + "  - {at: 1, add_predicate: (connected hall kitchen)}\n"
+        + "  - {at: 2, remove_predicate: (robot_at tiago kitchen)}\n"
+        + "  - {at: 3, set_function: (= (travel_time hall kitchen) 7)}\n"
+    )
+    mission = load_mission(path)
+    knowledge = build_knowledge(mission, parse_domain_files(mission.domain_paths))
+    facts = {str(a) for a in knowledge.get_predicates()}
+    assert facts == {"(robot_at tiago kitchen)", "(connected kitchen hall)"}
+    assert knowledge.get_function("(travel_time hall kitchen)") is None
+
+
+def test_mission_yaml_merge_keys_still_work(tmp_path: Path) -> None:
+    from plansys_bridge.mission_config import load_mission
+
+    path = tmp_path / "mission.yaml"
+    path.write_text(
+        MISSION.replace(
+            "performers:\n  - {kind: simulated, name: nav, actions: {move: [tiago]}}",
+            "performers:\n  - &nav {kind: simulated, name: nav, actions: {move: [tiago]}}\n"
+            "  - {<<: *nav, name: nav2}",
+        )
+    )
+    assert [p.name for p in load_mission(path).performers] == ["nav", "nav2"]
