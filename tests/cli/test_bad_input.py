@@ -233,3 +233,39 @@ def test_mission_yaml_merge_keys_still_work(tmp_path: Path) -> None:
         )
     )
     assert [p.name for p in load_mission(path).performers] == ["nav", "nav2"]
+
+
+# ------------------------------------------------------------------ Ctrl-C
+
+
+def test_ctrl_c_during_a_wall_clock_run_stops_cleanly(files: dict[str, str]) -> None:
+    """SIGINT mid-action: the action is cancelled, one short line, exit status 130."""
+    import signal
+    import subprocess
+    import sys
+
+    path = Path(files["mission"])
+    path.write_text(
+        MISSION.replace("clock: {kind: virtual}", "clock: {kind: wall}").replace(
+            "actions: {move: [tiago]}", "actions: {move: [tiago]}, durations: {move: 60}"
+        )
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "plansys_bridge", "run", str(path)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        # a child of a non-interactive shell may inherit SIGINT ignored
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    assert proc.stdout is not None
+    lines = []
+    for line in proc.stdout:
+        lines.append(line)
+        if "EXECUTING" in line:
+            break
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    assert err.strip() == "interrupted"
+    assert "CANCELLED (move tiago kitchen hall)" in out
