@@ -10,6 +10,7 @@ small) are reported here as ``PddlSyntaxError`` with the offending token's place
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from typing import Any
 
@@ -127,6 +128,13 @@ class Builder(Transformer[Token, Any]):
     def error(self, message: str, tok: Token) -> PddlSyntaxError:
         return PddlSyntaxError(message, self.loc(tok))
 
+    def number(self, tok: Token) -> float:
+        """A NUMBER token's value; one too large for a float (``1e999``) is an error."""
+        value = float(tok.value)
+        if not math.isfinite(value):
+            raise self.error(f"number {tok.value} is out of range", tok)
+        return value
+
     def typed(self, items: Iterable[Any], where: Token | None = None) -> tuple[TypedName, ...]:
         """Group ``a b - t c`` into typed names (untyped ones are ``object``)."""
         out: list[TypedName] = []
@@ -157,7 +165,7 @@ class Builder(Transformer[Token, Any]):
         if isinstance(value, Token):
             kind = value.type
             if kind == "NUMBER":
-                return Number(float(value.value))
+                return Number(self.number(value))
             if kind == "NAME":
                 return FluentRef(value.value, (), self.loc(value))
             if value.value == "?duration":
@@ -438,7 +446,7 @@ class Builder(Transformer[Token, Any]):
         op, ref, value = c
         if op.value != "=":
             raise self.error(f"initial values are set with '=', not '{op.value}'", op)
-        return FluentValue(ref, float(value.value))
+        return FluentValue(ref, self.number(value))
 
     def init(self, c: Children) -> tuple[str, Any]:
         return ("init", c)

@@ -454,8 +454,17 @@ def check_problem(problem: Problem, domain: Domain | None, sources: Mapping[str,
         checker.check_type_names(obj.types, obj.loc)
     for atom in problem.init:
         checker.atom(atom, {})
+    given: dict[tuple[str, tuple[str, ...]], FluentValue] = {}
     for value in problem.init_fluents:
         checker.fluent(value.fluent, {})
+        first = given.setdefault((value.fluent.name, value.fluent.args), value)
+        if first.value != value.value:
+            ref = value.fluent
+            raise checker.error(
+                f"({' '.join((ref.name, *ref.args))}) is given two initial values: "
+                f"{first.value:g} at {first.fluent.loc} and {value.value:g} here",
+                ref.loc,
+            )
     checker.condition(problem.goal, {})
     if problem.metric is not None and problem.metric.expression != "total-time":
         expr = problem.metric.expression

@@ -16,13 +16,24 @@ from plansys_bridge.errors import PddlError, PddlSemanticError, SourceLocation
 _TOKEN = re.compile(r"\s+|;[^\n]*|[()]|[^\s()]+")
 
 
+SNIPPET_WIDTH = 200
+"""Longest part of a source line a snippet quotes."""
+
+
 def snippet(text: str, line: int, column: int) -> str | None:
     """Quote ``line`` of ``text`` with a caret under ``column`` (both 1-based)."""
     lines = text.splitlines()
     if not 1 <= line <= len(lines):
         return None
     source = lines[line - 1].rstrip()
-    prefix = "".join(c if c == "\t" else " " for c in source[: max(column - 1, 0)])
+    column = max(column, 1)
+    if len(source) > SNIPPET_WIDTH:  # a generated one-line file: quote around the column
+        start = max(0, min(column - 1 - SNIPPET_WIDTH // 2, len(source) - SNIPPET_WIDTH))
+        end = start + SNIPPET_WIDTH
+        head = "..." if start > 0 else ""
+        source = head + source[start:end] + ("..." if end < len(source) else "")
+        column = column - start + len(head)
+    prefix = "".join(c if c == "\t" else " " for c in source[: column - 1])
     gutter = f"{line:>5} | "
     return f"{gutter}{source}\n{' ' * (len(gutter) - 2)}| {prefix}^"
 
