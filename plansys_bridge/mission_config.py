@@ -97,7 +97,7 @@ class PerformerEntry(BaseModel):
 
 class MissionConfig(_Strict):
     name: str = "mission"
-    domain: list[str]
+    domain: list[str] = Field(min_length=1)
     problem: str | None = None
     knowledge: KnowledgeConfig = Field(default_factory=KnowledgeConfig)
     goal: str | None = None

@@ -290,6 +290,13 @@ class SimulatedPerformer(ActionPerformer):
                     f"must be a number of seconds >= 0, got {seconds!r}",
                     key=f"{key}.durations.{name}",
                 )
+            # an action name, or a full action text "(move r1 a b)"
+            action = name.strip().lstrip("(").split(maxsplit=1)[:1]
+            if not action or action[0].lower() not in parsed.actions:
+                raise ConfigError(
+                    f"not one of this performer's actions ({', '.join(parsed.actions)})",
+                    key=f"{key}.durations.{name}",
+                )
         for name, low, high in (("default_duration", 0.0, math.inf), ("success_rate", 0.0, 1.0)):
             if name in s and (not is_number(s[name]) or not low <= s[name] <= high):
                 raise ConfigError(

@@ -177,6 +177,21 @@ def test_nonsense_number_is_refused_naming_the_option(
             "mission.yaml:events[0].set_function: <fluent>:1:5: unknown function 'travel_tim'",
         ),
         (
+            "actions: {move: [tiago]}",
+            "actions: {move: [tiago]}, durations: {mvoe: 3}",
+            "mission.yaml:performers[0].durations.mvoe: not one of this performer's actions",
+        ),
+        (
+            "actions: {move: [tiago]}",
+            "actions: {move: [tiago]}, durations: {'(fly tiago a b)': 3}",
+            "mission.yaml:performers[0].durations.(fly tiago a b): not one of this performer's",
+        ),
+        (
+            f"domain: {DOMAIN}",
+            "domain: []",
+            "mission.yaml:domain: List should have at least 1 item",
+        ),
+        (
             "clock: {kind: virtual}",
             "clock: {kind: virtual}\nname: again",
             "mission.yaml:11:1: not valid YAML: duplicate key 'name'",
