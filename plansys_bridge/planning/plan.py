@@ -9,6 +9,7 @@ raises :class:`PlanFormatError` naming file and line.
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -110,7 +111,16 @@ def parse_plan(text: str, filename: str = "<plan>") -> Plan:
                 f"expected 'TIME: (action args...) [DURATION]', got {line!r}",
                 SourceLocation(filename, lineno, 1),
             )
-        name, args = parse_action_text(m.group("action"))
+        column = len(raw) - len(raw.lstrip()) + 1  # of the stripped line's start
+        try:
+            name, args = parse_action_text(m.group("action"))
+        except PlanFormatError as exc:
+            where = SourceLocation(filename, lineno, column + m.start("action"))
+            raise PlanFormatError(str(exc), where) from exc
+        for group in ("time", "dur"):
+            if m.group(group) is not None and not math.isfinite(float(m.group(group))):
+                where = SourceLocation(filename, lineno, column + m.start(group))
+                raise PlanFormatError(f"number {m.group(group)} is out of range", where)
         dur = float(m.group("dur")) if m.group("dur") is not None else 0.0
         steps.append(PlanStep(float(m.group("time")), name, args, dur))
     return Plan(tuple(steps))
