@@ -209,7 +209,8 @@ class Terminal:
         if command in ("quit", "exit"):
             self.finished = True
             return ""
-        raise TerminalError(f"unknown command {head!r} (try: help)")
+        shown = head if len(head) <= 40 else head[:40] + "..."  # binary fed to stdin
+        raise TerminalError(f"unknown command {shown!r} (try: help)")
 
     # ---------------------------------------------------------------- get
 

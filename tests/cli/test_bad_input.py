@@ -284,3 +284,13 @@ def test_ctrl_c_during_a_wall_clock_run_stops_cleanly(files: dict[str, str]) -> 
     assert proc.returncode == 130, err
     assert err.strip() == "interrupted"
     assert "CANCELLED (move tiago kitchen hall)" in out
+
+
+def test_terminal_quotes_at_most_40_characters_of_an_unknown_command() -> None:
+    from plansys_bridge.knowledge.domain_expert import DomainExpert
+    from plansys_bridge.knowledge.problem_expert import ProblemExpert
+    from plansys_bridge.terminal import Terminal
+
+    domain = DomainExpert.from_files([DOMAIN])
+    result = Terminal(domain, ProblemExpert(domain)).execute_line("z" * 5000)
+    assert result == f"error: unknown command '{'z' * 40}...' (try: help)"
