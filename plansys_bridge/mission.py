@@ -130,26 +130,41 @@ def build_knowledge(mission: MissionConfig, domain: Domain) -> ProblemExpert:
         if mission.goal is not None:
             with _keyed(mission, "goal"):
                 knowledge.set_goal(mission.goal)
-        _check_performer_actions(mission, domain)
+        _check_performer_actions(mission, knowledge)
         _rehearse_events(mission, knowledge)
     return knowledge
 
 
-def _check_performer_actions(mission: MissionConfig, domain: Domain) -> None:
-    """A performer offering an action the domain lacks is a typo, not a capability:
-    no plan ever asks for it, and the action it was meant for finds no performer."""
+def _check_performer_actions(mission: MissionConfig, knowledge: ProblemExpert) -> None:
+    """A performer offering an action the domain lacks, or specialised to an object
+    the mission does not have, is a typo, not a capability: it never bids, and the
+    action it was meant for finds no performer."""
+    domain = knowledge.domain
     known = {a.name for a in domain.actions}
+    objects = set(knowledge.get_instances()) | {c.name for c in domain.constants}
     for i, entry in enumerate(mission.performers):
         actions = getattr(entry, "actions", None)
+        specs = actions if isinstance(actions, Mapping) else {}
         names = list(actions) if isinstance(actions, Mapping | list | tuple) else []
         for name in names:
-            if isinstance(name, str) and name.strip().lower() not in known:
+            if not isinstance(name, str):
+                continue
+            where = f"performers[{i}].actions.{name}"
+            if name.strip().lower() not in known:
                 raise ConfigError(
                     f"domain {domain.name} has no action {name!r} "
                     f"(its actions: {', '.join(sorted(known)) or 'none'})",
-                    key=f"performers[{i}].actions.{name}",
+                    key=where,
                     file=mission.source,
                 )
+            spec = specs.get(name)
+            for j, arg in enumerate(spec if isinstance(spec, list | tuple) else ()):
+                if isinstance(arg, str) and arg.strip() and arg.strip().lower() not in objects:
+                    raise ConfigError(
+                        f"no object {arg!r} in the mission's knowledge or the domain's constants",
+                        key=f"{where}[{j}]",
+                        file=mission.source,
+                    )
 
 
 class _Rehearsed(Exception):

@@ -178,6 +178,11 @@ def test_nonsense_number_is_refused_naming_the_option(
         ),
         (
             "actions: {move: [tiago]}",
+            "actions: {move: [tiagoo]}",
+            "mission.yaml:performers[0].actions.move[0]: no object 'tiagoo' in the mission's",
+        ),
+        (
+            "actions: {move: [tiago]}",
             "actions: {move: [tiago]}, durations: {mvoe: 3}",
             "mission.yaml:performers[0].durations.mvoe: not one of this performer's actions",
         ),
