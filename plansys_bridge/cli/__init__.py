@@ -40,6 +40,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader of stdout left (| head): end quietly, as Unix tools do
+        from plansys_bridge.cli.output import drop_stdout
+
+        drop_stdout()
+        return 141
     return code
 
 

@@ -8,6 +8,7 @@ import logging
 from typing import Any
 
 from plansys_bridge.cli.options import check_positive
+from plansys_bridge.cli.output import say
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.mission import MissionReport, run_mission
 from plansys_bridge.mission_config import load_mission
@@ -63,14 +64,14 @@ def handle(args: argparse.Namespace) -> int:
     quiet = args.quiet or args.json
     report = run_mission(
         mission,
-        out=None if quiet else print,
+        out=None if quiet else say,
         plan=plan,
         local_performers=not args.no_performers,
     )
     if args.json:
-        print(json.dumps(report_json(report), indent=2))
+        say(json.dumps(report_json(report), indent=2))
     else:
-        print(report.summary())
+        say(report.summary())
     return 0 if report.success else 1
 
 

@@ -299,3 +299,46 @@ def test_terminal_quotes_at_most_40_characters_of_an_unknown_command() -> None:
     domain = DomainExpert.from_files([DOMAIN])
     result = Terminal(domain, ProblemExpert(domain)).execute_line("z" * 5000)
     assert result == f"error: unknown command '{'z' * 40}...' (try: help)"
+
+
+# ------------------------------------------------------------------ | head
+
+
+def _read_one_line_then_close(argv: list[str], stdin: str = "") -> tuple[int, str]:
+    """Run the command with its stdout read by a reader that leaves after one line."""
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "plansys_bridge", *argv],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert proc.stdin is not None and proc.stdout is not None and proc.stderr is not None
+    proc.stdin.write(stdin)
+    proc.stdin.close()
+    assert proc.stdout.readline()
+    proc.stdout.close()
+    err = proc.stderr.read()
+    return proc.wait(timeout=60), err
+
+
+def test_mission_output_to_a_closed_pipe_finishes_the_mission_quietly(
+    files: dict[str, str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import os
+    import sys
+
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # the reader has gone before the first line
+    with os.fdopen(write_end, "w") as stream:
+        monkeypatch.setattr(sys, "stdout", stream)
+        assert main(["run", files["mission"]]) == 0  # the mission ran to its end
+        sys.stdout.flush()  # what is left goes nowhere, without an error
+
+
+def test_terminal_output_piped_to_head_ends_quietly() -> None:
+    code, err = _read_one_line_then_close(["terminal", DOMAIN], "get domain\n" * 2000)
+    assert (code, err) == (141, "")
