@@ -4,10 +4,12 @@ Every command reads files the same way so that every unreadable one fails the sa
 way: one line naming the path and the reason (``missing.pddl: cannot read domain
 file: No such file or directory``), and for a binary or wrongly encoded file the
 line and column of the first byte that is not UTF-8, never a decoding traceback.
+A byte order mark, which some Windows editors write, is not part of the text.
 """
 
 from __future__ import annotations
 
+import codecs
 from pathlib import Path
 
 from plansys_bridge.errors import PlansysBridgeError, SourceLocation
@@ -36,6 +38,7 @@ def read_text(path: str | Path, what: str = "file") -> str:
         data = Path(path).read_bytes()
     except OSError as exc:
         raise TextFileError(name, f"cannot read {what}: {exc.strerror or exc}") from exc
+    data = data.removeprefix(codecs.BOM_UTF8)  # Windows editors start files with one
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:

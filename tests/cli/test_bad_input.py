@@ -99,6 +99,17 @@ def test_unreadable_file_is_one_line_naming_it(
     assert expected in error_line(capsys)
 
 
+def test_files_saved_with_a_byte_order_mark_are_read(
+    files: dict[str, str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    domain = tmp_path / "domain.pddl"
+    domain.write_bytes(b"\xef\xbb\xbf" + Path(DOMAIN).read_bytes())
+    problem = tmp_path / "problem.pddl"
+    problem.write_bytes(b"\xef\xbb\xbf" + PROBLEM.encode())
+    assert main(["validate", str(domain), "--problem", str(problem)]) == 0
+    assert "problem p: 3 objects" in capsys.readouterr().out
+
+
 def test_terminal_source_command_names_a_binary_file(
     files: dict[str, str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
