@@ -12,6 +12,7 @@ import importlib
 import sys
 from collections.abc import Sequence
 
+from plansys_bridge.cli.signals import sigterm_interrupts
 from plansys_bridge.errors import PlansysBridgeError
 
 SUBCOMMANDS = ("validate", "plan", "run", "experiment", "terminal", "demo", "performers")
@@ -32,19 +33,20 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    try:
-        code: int = args.func(args)
-    except PlansysBridgeError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
-    except BrokenPipeError:  # the reader of stdout left (| head): end quietly, as Unix tools do
-        from plansys_bridge.cli.output import drop_stdout
+    with sigterm_interrupts() as termination:
+        try:
+            code: int = args.func(args)
+        except PlansysBridgeError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt:
+            print("terminated" if termination.received else "interrupted", file=sys.stderr)
+            return 143 if termination.received else 130
+        except BrokenPipeError:  # the reader of stdout left (| head): end quietly, as Unix does
+            from plansys_bridge.cli.output import drop_stdout
 
-        drop_stdout()
-        return 141
+            drop_stdout()
+            return 141
     return code
 
 

@@ -266,11 +266,17 @@ def test_mission_yaml_merge_keys_still_work(tmp_path: Path) -> None:
     assert [p.name for p in load_mission(path).performers] == ["nav", "nav2"]
 
 
-# ------------------------------------------------------------------ Ctrl-C
+# ------------------------------------------------------------------ Ctrl-C, SIGTERM
 
 
-def test_ctrl_c_during_a_wall_clock_run_stops_cleanly(files: dict[str, str]) -> None:
-    """SIGINT mid-action: the action is cancelled, one short line, exit status 130."""
+@pytest.mark.parametrize(
+    ("signal_name", "code", "line"),
+    [("SIGINT", 130, "interrupted"), ("SIGTERM", 143, "terminated")],
+)
+def test_ctrl_c_or_sigterm_during_a_wall_clock_run_stops_cleanly(
+    signal_name: str, code: int, line: str, files: dict[str, str]
+) -> None:
+    """SIGINT (or SIGTERM) mid-action: the action is cancelled, one short line."""
     import signal
     import subprocess
     import sys
@@ -290,15 +296,13 @@ def test_ctrl_c_during_a_wall_clock_run_stops_cleanly(files: dict[str, str]) -> 
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     assert proc.stdout is not None
-    lines = []
-    for line in proc.stdout:
-        lines.append(line)
-        if "EXECUTING" in line:
+    for progress in proc.stdout:
+        if "EXECUTING" in progress:
             break
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(getattr(signal, signal_name))
     out, err = proc.communicate(timeout=30)
-    assert proc.returncode == 130, err
-    assert err.strip() == "interrupted"
+    assert proc.returncode == code, err
+    assert err.strip() == line
     assert "CANCELLED (move tiago kitchen hall)" in out
 
 
