@@ -215,17 +215,29 @@ class _UniqueKeyLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep=deep)
 
 
-def load_mission(path: str | Path) -> MissionConfig:
-    """Read and validate a mission YAML file."""
+def load_yaml_file(path: str | Path, what: str = "file", key: str | None = None) -> Any:
+    """Read a YAML file a user names (mission, locations, segments, ...).
+
+    Unreadable or binary files, YAML syntax errors and repeated keys become one
+    ConfigError naming the file (with line:col where YAML knows it) and ``key``,
+    the mission key that named the file.
+    """
     p = Path(path)
     try:
-        text = read_text(p, "mission file")
+        text = read_text(p, what)
     except TextFileError as exc:
-        raise ConfigError(exc.reason, file=str(exc.location or p)) from exc
+        raise ConfigError(exc.reason, key=key, file=str(exc.location or p)) from exc
     try:
-        data = yaml.load(text, Loader=_UniqueKeyLoader)
+        return yaml.load(text, Loader=_UniqueKeyLoader)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"{p}:{mark.line + 1}:{mark.column + 1}" if mark is not None else str(p)
-        raise ConfigError(f"not valid YAML: {getattr(exc, 'problem', exc)}", file=where) from exc
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise ConfigError(f"not valid YAML: {problem}", key=key, file=where) from exc
+
+
+def load_mission(path: str | Path) -> MissionConfig:
+    """Read and validate a mission YAML file."""
+    p = Path(path)
+    data = load_yaml_file(p, "mission file")
     return mission_from_dict(data, source=str(p), base_dir=p.resolve().parent)

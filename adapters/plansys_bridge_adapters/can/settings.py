@@ -29,9 +29,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar, Union, get_args, get_origin, get_type_hints
 
-import yaml
-
 from plansys_bridge.errors import ConfigError
+from plansys_bridge.mission_config import load_yaml_file
 
 from .bus import BusConfig
 from .controller import ControllerConfig, MotionLimits
@@ -231,12 +230,7 @@ def load_locations(value: object, base_dir: Path, key: str) -> dict[str, Locatio
         if not path.is_absolute():
             path = base_dir / path
         file = str(path)
-        try:
-            loaded = yaml.safe_load(path.read_text(encoding="utf-8"))
-        except OSError as exc:
-            raise ConfigError(f"cannot read locations file {path}: {exc}", key=key) from exc
-        except yaml.YAMLError as exc:
-            raise ConfigError(f"{path}: not valid YAML: {exc}", key=key) from exc
+        loaded = load_yaml_file(path, "locations file", key)
         if not isinstance(loaded, Mapping) or "locations" not in loaded:
             raise ConfigError("needs a top-level 'locations:' mapping", key="locations", file=file)
         value = loaded["locations"]

@@ -23,9 +23,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from plansys_bridge.errors import ConfigError
+from plansys_bridge.mission_config import load_yaml_file
 
 from .geo import GeoPoint, offset
 
@@ -83,12 +82,7 @@ def load_locations(spec: str | Path | Mapping[str, Any], base_dir: Path, key: st
         path = Path(spec)
         if not path.is_absolute():
             path = base_dir / path
-        try:
-            data = yaml.safe_load(path.read_text(encoding="utf-8"))
-        except OSError as exc:
-            raise ConfigError(f"cannot read locations file: {exc}", key=key) from exc
-        except yaml.YAMLError as exc:
-            raise ConfigError(f"bad YAML: {exc}", key=key, file=str(path)) from exc
+        data = load_yaml_file(path, "locations file", key)
         return parse_locations(data, source=str(path), key="")
     return parse_locations(spec, source=key, key=key)
 

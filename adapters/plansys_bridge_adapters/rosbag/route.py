@@ -20,9 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from plansys_bridge.errors import ConfigError
+from plansys_bridge.mission_config import load_yaml_file
 
 from ..checks import mapping
 from .errors import BagError
@@ -244,12 +243,7 @@ class Route:
 
 
 def _load_segments_file(path: Path, key: str) -> Any:
-    try:
-        return yaml.safe_load(path.read_text())
-    except OSError as exc:
-        raise ConfigError(f"cannot read segments file {path}: {exc}", key=key) from exc
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"segments file {path} is not valid YAML: {exc}", key=key) from exc
+    return load_yaml_file(path, "segments file", key)
 
 
 def _seconds(value: Any, key: str) -> float | None:
