@@ -20,7 +20,6 @@ from typing import Any
 from plansys_bridge.clock import Clock, VirtualClock, WallClock, run
 from plansys_bridge.errors import ConfigError, PlansysBridgeError
 from plansys_bridge.execution.executor import Executor
-from plansys_bridge.execution.options import ExecutorOptions
 from plansys_bridge.execution.results import ExecutionResult
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, Topics
@@ -224,10 +223,6 @@ def _keyed(mission: MissionConfig, key: str) -> Iterator[None]:
         yield
     except PlansysBridgeError as exc:
         raise ConfigError(str(exc), key=key, file=mission.source) from exc
-
-
-def executor_options(mission: MissionConfig) -> ExecutorOptions:
-    return mission.executor_options()
 
 
 class MissionSession:
@@ -456,7 +451,7 @@ async def _run(
         )
         for line in plan.to_text().splitlines():
             say(f"    {line}")
-        executor = Executor(session.hub, domain, knowledge, planner, executor_options(mission))
+        executor = Executor(session.hub, domain, knowledge, planner, mission.executor_options())
         execute = executor.execute(
             plan, goal=knowledge.get_goal(), on_info=progress_printer(say, elapsed)
         )

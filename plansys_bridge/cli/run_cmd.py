@@ -93,15 +93,6 @@ def report_json(report: MissionReport) -> dict[str, Any]:
             "failures": r.failures,
             "total_time_s": round(r.total_time, 3),
             "efficiency_percent": round(r.efficiency_percent, 2),
-            "records": [
-                {
-                    "action": a.text,
-                    "status": a.status.name,
-                    "start": a.start,
-                    "end": a.end,
-                    "performer": a.performer,
-                }
-                for a in r.actions
-            ],
+            "records": [{"action": a.text, **a.to_dict()} for a in r.actions],
         }
     return out

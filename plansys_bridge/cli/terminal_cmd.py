@@ -145,7 +145,7 @@ def mission_executor(
     """An executor factory running plans with the mission's performers and clock."""
     from plansys_bridge.clock import run as run_on_clock
     from plansys_bridge.execution.executor import Executor
-    from plansys_bridge.mission import MissionSession, executor_options, make_clock
+    from plansys_bridge.mission import MissionSession, make_clock
 
     quiet = mission.model_copy(update={"events": []})
 
@@ -155,7 +155,7 @@ def mission_executor(
         async def go() -> Any:
             async with MissionSession(quiet, knowledge.domain, knowledge, clock) as session:
                 executor = Executor(
-                    session.hub, knowledge.domain, knowledge, planner(), executor_options(quiet)
+                    session.hub, knowledge.domain, knowledge, planner(), quiet.executor_options()
                 )
                 return await executor.execute(plan, goal=knowledge.get_goal())
 

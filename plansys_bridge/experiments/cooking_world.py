@@ -45,12 +45,11 @@ PAPER_DURATIONS = {"move": 3.8, "transport": 8.8, "cook": 21.0, "recharge": 10.0
 ROBOT_ACTIONS = ("move", "transport", "recharge", "cook_omelette", "cook_cake", "cook_spaghetti")
 
 
-CONFIGS_DIR = Path(__file__).resolve().parents[2] / "configs"
-
-
 def cooking_domain_path() -> Path:
     """The cooking domain with the paper's durations, kept in configs/pddl."""
-    return CONFIGS_DIR / "pddl" / "cooking_domain.pddl"
+    from plansys_bridge.mission import default_missions_dir
+
+    return default_missions_dir() / "pddl" / "cooking_domain.pddl"
 
 
 def robot_names(count: int) -> list[str]:
