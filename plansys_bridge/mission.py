@@ -20,12 +20,14 @@ from typing import Any
 from plansys_bridge.clock import Clock, VirtualClock, WallClock, run
 from plansys_bridge.errors import ConfigError, PlansysBridgeError
 from plansys_bridge.execution.executor import Executor
-from plansys_bridge.execution.results import ExecutionResult
+from plansys_bridge.execution.results import ExecutionResult, efficiency_text
 from plansys_bridge.hub.hub import Hub
-from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, Topics
+from plansys_bridge.hub.messages import ActionStatus, Topics
 from plansys_bridge.hub.transport import InProcessTransport, Transport
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.mission_config import EventConfig, MissionConfig
+from plansys_bridge.monitoring.progress import ProgressLines
+from plansys_bridge.monitoring.watch import MissionWatch
 from plansys_bridge.pddl.model import Domain
 from plansys_bridge.pddl.parser import parse_domain_files
 from plansys_bridge.performers.base import ActionPerformer, PerformerContext
@@ -74,7 +76,7 @@ class MissionReport:
                 f"  actions: {done} succeeded, {r.failures} failed or halted,"
                 f" {len(r.actions)} planned",
                 f"  mission time: {r.total_time:.1f} s, planning: {self.planning_s:.3f} s",
-                f"  efficiency: {r.efficiency_percent:.1f} % (action time / total time)",
+                f"  efficiency: {efficiency_text(r)} (action time / total time)",
             ]
         if self.events_applied:
             lines.append(f"  events: {'; '.join(self.events_applied)}")
@@ -340,26 +342,6 @@ class MissionSession:
             self.out(text)
 
 
-def progress_printer(
-    out: Printer, start: Callable[[], float]
-) -> Callable[[ActionExecutionInfo], None]:
-    """Print one line per action status change (not per feedback)."""
-    last: dict[str, ActionStatus] = {}
-
-    def on_info(info: ActionExecutionInfo) -> None:
-        if last.get(info.action_full_name) == info.status:
-            return
-        last[info.action_full_name] = info.status
-        extra = (
-            f" - {info.message_status}"
-            if info.message_status and info.status in (ActionStatus.FAILED, ActionStatus.CANCELLED)
-            else ""
-        )
-        out(f"[{start():8.1f}] {info.status.name:<9} {info.action_full_name}{extra}")
-
-    return on_info
-
-
 async def plan_now(
     planner: Planner, domain: Domain, knowledge: ProblemExpert
 ) -> tuple[Plan, float]:
@@ -452,14 +434,14 @@ async def _run(
         for line in plan.to_text().splitlines():
             say(f"    {line}")
         executor = Executor(session.hub, domain, knowledge, planner, mission.executor_options())
-        execute = executor.execute(
-            plan, goal=knowledge.get_goal(), on_info=progress_printer(say, elapsed)
-        )
+        watch = MissionWatch(clock.now, ProgressLines(say, elapsed)).attach(session.hub)
+        execute = executor.execute(plan, goal=knowledge.get_goal())
         try:
             result = await (
                 asyncio.wait_for(execute, mission.timeout) if mission.timeout else execute
             )
         except TimeoutError:
+            watch.close()
             return MissionReport(
                 mission.name,
                 False,
@@ -469,10 +451,8 @@ async def _run(
                 planning_s,
                 session.events_applied,
             )
-        for extra in result.plans[1:]:
-            say(f"replanned ({len(extra)} actions):")
-            for line in extra.to_text().splitlines():
-                say(f"    {line}")
+        await asyncio.sleep(0)  # the last messages of the plan reach the watch
+        watch.close()
         return MissionReport(
             mission.name,
             result.success,

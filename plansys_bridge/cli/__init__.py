@@ -12,7 +12,9 @@ import importlib
 import sys
 from collections.abc import Sequence
 
+from plansys_bridge import __version__
 from plansys_bridge.cli.signals import sigterm_interrupts
+from plansys_bridge.cli.verbosity import add_verbosity, configure_logging
 from plansys_bridge.errors import PlansysBridgeError
 
 SUBCOMMANDS = ("validate", "plan", "run", "experiment", "terminal", "demo", "performers")
@@ -23,16 +25,20 @@ def build_parser() -> argparse.ArgumentParser:
         prog="plansys-bridge",
         description="Plan and execute robot missions the PlanSys2 way.",
     )
+    parser.add_argument("--version", action="version", version=f"plansys-bridge {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in SUBCOMMANDS:
         module = importlib.import_module(f"plansys_bridge.cli.{name}_cmd")
         module.register(sub)
+    for command in sub.choices.values():
+        add_verbosity(command)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    configure_logging(args)
     with sigterm_interrupts() as termination:
         try:
             code: int = args.func(args)

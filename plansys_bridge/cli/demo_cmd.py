@@ -35,6 +35,9 @@ def handle(args: argparse.Namespace) -> int:
         argv += ["--time-scale", str(args.time_scale)]
     if args.json:
         argv.append("--json")
+    if getattr(args, "quiet", False):
+        argv.append("--quiet")
+    argv += ["--verbose"] * int(getattr(args, "verbose", 0) or 0)
     parser = argparse.ArgumentParser(prog="plansys-bridge")
     run_cmd.register(parser.add_subparsers())
     run_args = parser.parse_args(argv)

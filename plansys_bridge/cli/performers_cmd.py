@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
-import logging
 import signal
 from typing import Any
 
@@ -37,12 +36,10 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--duration", type=float, help="stop after this many seconds (default: until interrupted)"
     )
-    p.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
     p.set_defaults(func=handle)
 
 
 def handle(args: argparse.Namespace) -> int:
-    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING)
     check_positive(args.time_scale, "--time-scale")
     check_positive(args.duration, "--duration")
     mission = load_mission(args.mission)

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import logging
 from typing import Any
 
 from plansys_bridge.cli.options import check_positive
 from plansys_bridge.cli.output import say
+from plansys_bridge.cli.verbosity import add_verbosity
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.mission import MissionReport, run_mission
 from plansys_bridge.mission_config import load_mission
@@ -30,13 +30,11 @@ def register(sub: Any) -> None:
         "(`plansys-bridge performers`, needs transport: {kind: dds})",
     )
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
-    p.add_argument("-q", "--quiet", action="store_true", help="print only the summary")
-    p.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    add_verbosity(p)
     p.set_defaults(func=handle)
 
 
 def handle(args: argparse.Namespace) -> int:
-    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING)
     check_positive(args.time_scale, "--time-scale")
     mission = load_mission(args.mission)
     updates: dict[str, Any] = {}

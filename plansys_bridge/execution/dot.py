@@ -26,7 +26,14 @@ STATUS_COLOURS: dict[ActionStatus, str] = {
 
 
 def _quote(text: str) -> str:
-    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    """A DOT string: quotes and backslashes escaped, line breaks as DOT's ``\\n``.
+
+    Escaping the backslash of a ``\\n`` already in ``text`` would show a literal
+    backslash-n in the picture, so labels carry real newlines and only here become
+    the escape Graphviz centres a line break for.
+    """
+    escaped = text.replace("\\", "\\\\").replace('"', '\\"')
+    return '"' + escaped.replace("\r\n", "\n").replace("\n", "\\n") + '"'
 
 
 def plan_graph_to_dot(
@@ -46,7 +53,7 @@ def plan_graph_to_dot(
     lines.append('    label="plan";')
     for i, step in enumerate(graph.steps):
         status = statuses[i] if statuses is not None else ActionStatus.NOT_EXECUTED
-        label = f"{i}: {step.text}\\n[{step.time:.3f}, {step.duration:.3f}] {status.name.lower()}"
+        label = f"{i}: {step.text}\n[{step.time:.3f}, {step.duration:.3f}] {status.name.lower()}"
         lines.append(f"    a{i} [label={_quote(label)}, fillcolor={STATUS_COLOURS[status]}];")
     lines.append("  }")
     for src, dst, data in sorted(graph.graph.edges(data=True)):

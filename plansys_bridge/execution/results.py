@@ -12,7 +12,7 @@ from typing import Any
 from plansys_bridge.hub.messages import ActionStatus
 from plansys_bridge.planning.plan import Plan
 
-__all__ = ["ActionRecord", "ExecutionResult", "efficiency"]
+__all__ = ["ActionRecord", "ExecutionResult", "efficiency", "efficiency_text"]
 
 
 @dataclass
@@ -123,7 +123,7 @@ class ExecutionResult:
         head = (
             f"{self.status}: {len(self.actions)} actions, {self.failures} failed, "
             f"{self.replans} replans, {self.total_time:.1f} s, "
-            f"efficiency {self.efficiency_percent:.1f} %"
+            f"efficiency {efficiency_text(self)}"
         )
         lines = [head] + ([f"  {self.message}"] if self.message else [])
         for a in self.actions:
@@ -145,3 +145,14 @@ def efficiency(actions: list[ActionRecord], total_time: float) -> float:
     if total_time <= 0:
         return 0.0
     return sum(a.execution_time for a in actions) / total_time
+
+
+def efficiency_text(result: ExecutionResult) -> str:
+    """The efficiency for people: ``"183.4 %"``, or ``"n/a (no action succeeded)"``.
+
+    Failed and halted actions count their working time too, so two robots failing
+    side by side would read as 200 % efficient, which says nothing useful.
+    """
+    if not any(a.status == ActionStatus.SUCCEEDED for a in result.actions):
+        return "n/a (no action succeeded)"
+    return f"{result.efficiency_percent:.1f} %"

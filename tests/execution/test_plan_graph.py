@@ -191,6 +191,10 @@ def test_ordered_subgoals_and_dot() -> None:
     dot = plan_graph_to_dot(graph, statuses, goals)
     assert dot.startswith('digraph "plan"')
     assert 'a0 [label="0: (move robot3 assembly_zone wheels_zone)' in dot
+    # one DOT line break between the action and its times (a doubled backslash
+    # would show a literal \n in the rendered picture)
+    assert "wheels_zone)\\n[0.000, " in dot and "\\\\n" not in dot
+    assert '"plan \\"a\\\\b\\"\\nnext"' in plan_graph_to_dot(graph, name='plan "a\\b"\nnext')
     assert "fillcolor=palegreen" in dot and "fillcolor=yellow" in dot
     assert 'g0 [label="1. (car_assembled car_1)"]' in dot
     assert "a6 -> g0" in dot

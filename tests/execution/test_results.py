@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from plansys_bridge.execution.results import ActionRecord, ExecutionResult
+from plansys_bridge.execution.results import ActionRecord, ExecutionResult, efficiency_text
 from plansys_bridge.hub.messages import ActionStatus
 
 
@@ -30,3 +30,21 @@ def test_efficiency_is_summed_execution_time_over_total_time() -> None:
     assert result.efficiency() == pytest.approx(25.0 / 20.0)
     assert result.efficiency_percent == pytest.approx(125.0)
     assert ExecutionResult(True, "succeeded").efficiency() == 0.0
+
+
+def test_efficiency_is_not_shown_when_no_action_succeeded() -> None:
+    """Two robots failing side by side worked 200 % of the time, and achieved nothing."""
+    failed = [
+        ActionRecord("(a)", ActionStatus.FAILED, start=0.0, confirmed=0.0, end=10.0),
+        ActionRecord("(b)", ActionStatus.FAILED, start=0.0, confirmed=0.0, end=10.0),
+    ]
+    result = ExecutionResult(False, "failed", failed, started=0.0, finished=10.0)
+    assert result.efficiency_percent == pytest.approx(200.0)
+    assert efficiency_text(result) == "n/a (no action succeeded)"
+    assert "efficiency n/a (no action succeeded)" in result.summary()
+    assert "200" not in result.summary()
+    result.actions.append(
+        ActionRecord("(c)", ActionStatus.SUCCEEDED, start=10.0, confirmed=10.0, end=15.0)
+    )
+    result.finished = 20.0
+    assert efficiency_text(result) == "125.0 %"
