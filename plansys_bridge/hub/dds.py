@@ -136,12 +136,20 @@ class _Endpoint:
     condition: Any
 
 
-def _qos(depth: int | None, *, marked: bool = False) -> Qos:
-    """Reliable, volatile, XCDR1; ``depth`` None keeps all (readers)."""
+def _qos(channel: Channel, *, reader: bool = False, marked: bool = False) -> Qos:
+    """PlanSys2's QoS for the channel's topic (:mod:`~plansys_bridge.hub.dds_qos`), XCDR1.
+
+    Readers keep every sample until the reader thread takes it, so a burst longer
+    than the depth is not cut short on arrival; they ask for the writer's durability
+    so a latched topic's history reaches a late joiner.
+    """
+    qos = channel.qos
     policies: list[Any] = [
-        Policy.Reliability.Reliable(duration(seconds=1)),
-        Policy.History.KeepAll if depth is None else Policy.History.KeepLast(depth),
-        Policy.Durability.Volatile,
+        Policy.Reliability.Reliable(duration(seconds=1))
+        if qos.reliable
+        else Policy.Reliability.BestEffort,
+        Policy.History.KeepAll if reader else Policy.History.KeepLast(qos.depth),
+        Policy.Durability.TransientLocal if qos.transient_local else Policy.Durability.Volatile,
         # ROS 2 (rmw_cyclonedds) speaks XCDR1; say so rather than rely on defaults.
         Policy.DataRepresentation(use_cdrv0_representation=True),
     ]
@@ -230,10 +238,8 @@ class DdsTransport:
         p = self._participant
         topic = Topic(p, channel.dds_topic, channel.idl_type)
         marked = not channel.project and route.project is not None
-        writer = DataWriter(p, topic, _qos(channel.depth, marked=marked))
-        # Writers keep PlanSys2's depth; readers keep everything until the reader thread
-        # takes it, so a burst longer than the depth is not cut short on arrival.
-        reader = DataReader(p, topic, _qos(None))
+        writer = DataWriter(p, topic, _qos(channel, marked=marked))
+        reader = DataReader(p, topic, _qos(channel, reader=True))
         condition = ReadCondition(reader, _ANY_SAMPLE)
         self._waitset.attach(condition)
         return _Endpoint(route, channel, topic, writer, reader, condition)

@@ -16,9 +16,9 @@ from hypothesis import strategies as st
 
 from plansys_bridge.errors import HubError
 from plansys_bridge.hub import dds_codec as C
-from plansys_bridge.hub import dds_types as T
 from plansys_bridge.hub import messages as hm
 from plansys_bridge.hub.hub import Hub
+from plansys_bridge.interfaces.dds import dds_type
 from plansys_bridge.monitoring.recorder import MissionRecorder
 
 # CDR strings end with NUL, so a DDS string cannot hold one (as in ROS 2).
@@ -163,10 +163,15 @@ def test_float32_fields_are_single_precision_like_plansys2() -> None:
 
 
 def test_ros2_type_and_topic_names() -> None:
-    assert T.ActionExecution_.__idl_typename__ == "plansys2_msgs::msg::dds_::ActionExecution_"
-    assert T.Time_.__idl_typename__ == "builtin_interfaces::msg::dds_::Time_"
     assert (
-        T.BridgeActionExecution_.__idl_typename__
+        dds_type("plansys2_msgs/msg/ActionExecution").__idl_typename__
+        == "plansys2_msgs::msg::dds_::ActionExecution_"
+    )
+    assert dds_type("builtin_interfaces/msg/Time").__idl_typename__ == (
+        "builtin_interfaces::msg::dds_::Time_"
+    )
+    assert (
+        dds_type("plansys_bridge_msgs/msg/ActionExecution").__idl_typename__
         == "plansys_bridge_msgs::msg::dds_::ActionExecution_"
     )
     hub = C.ROUTES[hm.Topics.ACTIONS_HUB]
@@ -193,7 +198,7 @@ def test_encode_refuses_unknown_topics_wrong_types_and_bad_stamps() -> None:
 def test_decode_refuses_unknown_constants() -> None:
     channel = C.ROUTES[hm.Topics.ACTIONS_HUB].plain
     with pytest.raises(ValueError):
-        C.decode(channel, T.ActionExecution_(type=42))
+        C.decode(channel, dds_type("plansys2_msgs/msg/ActionExecution")(type=42))
 
 
 SAMPLES: list[tuple[str, Any]] = [

@@ -20,11 +20,11 @@ from cyclonedds.topic import Topic
 
 from plansys_bridge.clock import VirtualClock, run
 from plansys_bridge.errors import ConfigError, HubError
-from plansys_bridge.hub import dds_types as T
 from plansys_bridge.hub import messages as hm
 from plansys_bridge.hub.dds import DdsTransport
 from plansys_bridge.hub.dds_config import loopback_config
 from plansys_bridge.hub.transport import Transport
+from plansys_bridge.interfaces.dds import dds_type
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -165,12 +165,16 @@ def test_plain_messages_of_another_dds_node_arrive_with_default_project_fields()
         b.subscribe(hm.Topics.ACTIONS_HUB, got.append)
         foreign = DomainParticipant(a.domain_id)
         try:
-            topic = Topic(foreign, "rt/actions_hub", T.ActionExecution_)
+            topic = Topic(foreign, "rt/actions_hub", dds_type("plansys2_msgs/msg/ActionExecution"))
             writer = DataWriter(foreign, topic)
             async with asyncio.timeout(5):
                 while writer.get_publication_matched_status().current_count < 2:
                     await asyncio.sleep(0.01)
-            writer.write(T.ActionExecution_(type=2, node_id="ros_node", action="move"))
+            writer.write(
+                dds_type("plansys2_msgs/msg/ActionExecution")(
+                    type=2, node_id="ros_node", action="move"
+                )
+            )
             await until(lambda: bool(got))
             await asyncio.sleep(0.05)
         finally:
