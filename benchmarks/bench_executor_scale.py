@@ -9,7 +9,11 @@ efficiency metric (summed action time over total time, so about 100 % per robot)
 
 Run::
 
-    python benchmarks/bench_executor_scale.py [--sizes 100 500 1000 5000] [--json]
+    python benchmarks/bench_executor_scale.py [--sizes 100 500 1000 5000] [--robots N] [--json]
+
+With ``--robots`` fixed, the work per action is the same at every size, so the wall
+time should grow in proportion to the plan length (the last column: wall time per
+action relative to the smallest size).
 """
 
 from __future__ import annotations
@@ -30,9 +34,11 @@ from plansys_bridge.performers.base import PerformerContext
 from plansys_bridge.performers.simulated import SimulatedPerformer
 
 
-def measure(actions: int) -> dict[str, Any]:
-    domain, knowledge, plan = world(actions)
-    robots = max(1, actions // 20)
+def measure(
+    actions: int, robots: int | None = None, options: ExecutorOptions | None = None
+) -> dict[str, Any]:
+    domain, knowledge, plan = world(actions, robots)
+    robots = robots if robots is not None else max(1, actions // 20)
     clock = VirtualClock()
 
     async def main() -> dict[str, Any]:
@@ -51,7 +57,7 @@ def measure(actions: int) -> dict[str, Any]:
         ]
         for p in performers:
             await p.start()
-        executor = Executor(hub, domain, knowledge, None, ExecutorOptions(dot_period=30.0))
+        executor = Executor(hub, domain, knowledge, None, options or ExecutorOptions())
         t0 = time.perf_counter()
         result = await executor.execute(plan)
         wall = time.perf_counter() - t0
@@ -75,18 +81,25 @@ def measure(actions: int) -> dict[str, Any]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[100, 500, 1000, 5000])
+    parser.add_argument(
+        "--robots", type=int, help="a fixed robot count (default: one robot per 20 actions)"
+    )
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
-    rows = [measure(n) for n in args.sizes]
+    rows = [measure(n, args.robots) for n in args.sizes]
     if args.json:
         print(json.dumps(rows, indent=2))
         return
-    head = ("actions", "robots", "planned s", "mission s", "wall s", "eff %")
+    head: tuple[str, ...] = ("actions", "robots", "planned s", "mission s", "wall s", "eff %")
+    head += ("ms/action", "x first")
     print(" ".join(f"{h:>10}" for h in head))
+    first = rows[0]["wall_s"] / rows[0]["actions"]
     for r in rows:
+        per_action = r["wall_s"] / r["actions"]
         print(
             f"{r['actions']:>10} {r['robots']:>10} {r['planned_makespan_s']:>10.1f} "
-            f"{r['mission_time_s']:>10.1f} {r['wall_s']:>10.2f} {r['efficiency_percent']:>10.0f}"
+            f"{r['mission_time_s']:>10.1f} {r['wall_s']:>10.2f} {r['efficiency_percent']:>10.0f} "
+            f"{per_action * 1e3:>10.3f} {per_action / first:>10.2f}"
         )
 
 

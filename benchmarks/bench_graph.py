@@ -59,10 +59,13 @@ DOMAIN = """
 ZONES = 12
 
 
-def world(actions: int) -> tuple[Domain, ProblemExpert, Plan]:
-    """A knowledge base and a valid plan of exactly ``actions`` steps."""
+def world(actions: int, robots: int | None = None) -> tuple[Domain, ProblemExpert, Plan]:
+    """A knowledge base and a valid plan of exactly ``actions`` steps.
+
+    ``robots`` defaults to one per 20 actions; a fixed count makes plans longer per
+    robot (what execution cost linear in plan length is measured with)."""
     domain = parse_domain(DOMAIN, "<ring>")
-    robots = max(1, actions // 20)
+    robots = robots if robots is not None else max(1, actions // 20)
     k = ProblemExpert(domain)
     with k.transaction():
         for z in range(ZONES):

@@ -31,13 +31,14 @@ from typing import Any, Literal
 
 from plansys_bridge.errors import ConfigError, HubError
 from plansys_bridge.hub.hub import Hub
+from plansys_bridge.hub.liveness import LivenessTable
 from plansys_bridge.hub.messages import (
     ActionExecution,
     ActionPerformerStatus,
     ExecutionType,
-    PerformerState,
     Topics,
 )
+from plansys_bridge.hub.routing import client_keys
 from plansys_bridge.hub.settings import is_number, settings_from_mapping
 
 __all__ = [
@@ -170,10 +171,10 @@ class ActionClient:
         self._loop: asyncio.AbstractEventLoop | None = None
         self._pending_bidders: list[str] = []
         self._confirm_cb: Callable[[str], None] | None = None
-        self._busy_nodes: set[str] = set()
-        """Matching performers last heard RUNNING (busy with another action)."""
         self._freed = False
         """A matching performer went from RUNNING to READY: worth asking again now."""
+        self._liveness: LivenessTable | None = None
+        self._unwatch: Callable[[], None] = _nothing
 
     @property
     def full_name(self) -> str:
@@ -199,10 +200,9 @@ class ActionClient:
             raise HubError(f"{self!r}: run() may be called only once")
         self._confirm_cb = confirm_cb
         self._loop = asyncio.get_running_loop()
-        subs = [
-            self.hub.subscribe(Topics.ACTIONS_HUB, self._on_action_msg),
-            self.hub.subscribe(Topics.PERFORMERS_STATUS, self._on_status_msg),
-        ]
+        self._liveness = self.hub.liveness
+        keys = client_keys(self.request_id, self.action, self.arguments)
+        sub = self.hub.subscribe(Topics.ACTIONS_HUB, self._on_action_msg, keys=keys)
         try:
             return await self._run(feedback_cb)
         except BaseException:
@@ -214,8 +214,7 @@ class ActionClient:
             raise
         finally:
             self.phase = ClientPhase.DONE
-            for sub in subs:
-                sub.close()
+            sub.close()
 
     def cancel(self) -> None:
         """Stop the action: CANCEL to the confirmed performer; ``run()`` returns cancelled."""
@@ -274,11 +273,23 @@ class ActionClient:
         self._cancel_sent_to = None
         start = loop.time()
         give_up_at = start + policy.give_up_after
+        self._pending_bidders = []
+        self._freed = False
+        if self._liveness is not None:
+            self._unwatch = self._liveness.watch(self.action, self._on_freed)
+        try:
+            return await self._bidding(excluded, start, give_up_at)
+        finally:
+            self._unwatch()
+            self._unwatch = _nothing
+
+    async def _bidding(self, excluded: set[str], start: float, give_up_at: float) -> str | None:
+        loop = self._require_loop()
+        policy = self.policy
         sent = 0
         bids: list[tuple[float, int, str]] = []
         seen: set[str] = set()
         bid_deadline = math.inf
-        self._pending_bidders = []
         while True:
             if self._cancel_requested:
                 self._reject_pending()
@@ -349,7 +360,11 @@ class ActionClient:
                 return self._outcome(False, "cancelled", reauctioned, lost, cancelled=True)
             deadline = self._last_seen + self.policy.liveness_timeout
             if loop.time() >= deadline:
-                return None
+                heard = self._liveness.last_running(winner) if self._liveness else None
+                if heard is None or heard <= self._last_seen:
+                    return None
+                self._last_seen = heard  # its RUNNING heartbeats kept it alive
+                continue
             msg = await self._next(deadline)
             if msg is None:
                 continue
@@ -440,23 +455,11 @@ class ActionClient:
             self._inbox.append(msg)
             self._wake()
 
-    def _on_status_msg(self, msg: object) -> None:
-        if not isinstance(msg, ActionPerformerStatus):
-            return
-        if (
-            self.phase is ClientPhase.EXECUTING
-            and msg.node_name == self.performer
-            and msg.state is PerformerState.RUNNING
-            and self._loop is not None
-        ):
-            self._last_seen = self._loop.time()
-        elif self.phase is ClientPhase.AUCTION and self._could_serve(msg):
-            if msg.state is PerformerState.RUNNING:
-                self._busy_nodes.add(msg.node_name)
-            elif msg.state is PerformerState.READY and msg.node_name in self._busy_nodes:
-                self._busy_nodes.discard(msg.node_name)
-                self._freed = True
-                self._wake()
+    def _on_freed(self, msg: ActionPerformerStatus) -> None:
+        """The liveness table saw a performer of our action finish its other work."""
+        if self.phase is ClientPhase.AUCTION and self._could_serve(msg):
+            self._freed = True
+            self._wake()
 
     def _could_serve(self, msg: ActionPerformerStatus) -> bool:
         """Does this heartbeat come from a performer whose action and specialised
@@ -490,6 +493,10 @@ class ActionClient:
             if timer is not None:
                 timer.cancel()
         return self._inbox.popleft() if self._inbox else None
+
+
+def _nothing() -> None:
+    return None
 
 
 def _resolve(waiter: asyncio.Future[None]) -> None:

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Hashable, Iterable
 
 from plansys_bridge.clock import Clock, WallClock
+from plansys_bridge.hub.liveness import LivenessTable
+from plansys_bridge.hub.messages import Topics
+from plansys_bridge.hub.routing import TopicRouter
 from plansys_bridge.hub.transport import InProcessTransport, Subscription, Transport
 
 __all__ = ["Hub"]
@@ -14,23 +17,58 @@ class Hub:
     """What executors and performers hold: ``publish``, ``subscribe`` and the ``clock``.
 
     A thin wrapper so that code never depends on which transport carries the
-    messages; swapping the in-process transport for DDS changes nothing else.
+    messages; swapping the in-process transport for DDS changes nothing else. The hub
+    takes one transport subscription per topic and routes each message to the local
+    subscribers it concerns (:mod:`plansys_bridge.hub.routing`); heartbeats feed one
+    :class:`~plansys_bridge.hub.liveness.LivenessTable`.
     """
 
     def __init__(self, transport: Transport | None = None, clock: Clock | None = None) -> None:
         self.transport: Transport = transport if transport is not None else InProcessTransport()
         self.clock: Clock = clock if clock is not None else WallClock()
+        self._routers: dict[str, TopicRouter] = {}
+        self._liveness: LivenessTable | None = None
 
     def publish(self, topic: str, msg: object) -> None:
         self.transport.publish(topic, msg)
 
-    def subscribe(self, topic: str, callback: Callable[[object], None]) -> Subscription:
-        return self.transport.subscribe(topic, callback)
+    def subscribe(
+        self,
+        topic: str,
+        callback: Callable[[object], None],
+        *,
+        keys: Iterable[Hashable] | None = None,
+    ) -> Subscription:
+        """Call ``callback(msg)`` on the loop for messages of ``topic``.
+
+        Without ``keys``: every message. With ``keys`` (see
+        :func:`~plansys_bridge.hub.routing.performer_keys` and
+        :func:`~plansys_bridge.hub.routing.client_keys`): only the messages routed to
+        one of them, plus any message the topic's router cannot place.
+        """
+        router = self._routers.get(topic)
+        if router is None:
+            router = TopicRouter(topic)
+            router.transport_subscription = self.transport.subscribe(topic, router.dispatch)
+            self._routers[topic] = router
+        return router.add(callback, keys)
+
+    @property
+    def liveness(self) -> LivenessTable:
+        """The heartbeat table of this hub (subscribed on first use)."""
+        if self._liveness is None:
+            self._liveness = LivenessTable()
+            self.subscribe(Topics.PERFORMERS_STATUS, self._liveness.on_status)
+        return self._liveness
 
     async def start(self) -> None:
         await self.transport.start()
 
     async def close(self) -> None:
+        for router in self._routers.values():
+            router.close()
+        self._routers.clear()
+        self._liveness = None
         await self.transport.close()
 
     def now(self) -> float:

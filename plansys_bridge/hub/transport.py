@@ -19,7 +19,7 @@ from typing import Protocol, runtime_checkable
 
 from plansys_bridge.errors import HubError
 
-__all__ = ["InProcessTransport", "Subscription", "Transport"]
+__all__ = ["InProcessTransport", "Subscription", "Transport", "report_subscriber_error"]
 
 log = logging.getLogger(__name__)
 
@@ -84,6 +84,7 @@ class InProcessTransport:
         self._loop: asyncio.AbstractEventLoop | None = None
         self._loop_thread: int | None = None
         self._closed = False
+        self._pending: list[tuple[str, list[_InProcessSubscription], object]] = []
         self.published = 0
         """Messages published so far (all topics), for statistics."""
 
@@ -145,9 +146,21 @@ class InProcessTransport:
                 ) from exc
             self._bind(loop)
         if threading.get_ident() == self._loop_thread:
-            loop.call_soon(self._deliver, topic, subs, msg)
+            # Messages published one after another share one loop callback: with many
+            # bidders most of an auction's cost was a callback per message.
+            pending = self._pending
+            pending.append((topic, subs, msg))
+            if len(pending) == 1:
+                loop.call_soon(self._drain)
         else:
             loop.call_soon_threadsafe(self._deliver, topic, subs, msg)
+
+    def _drain(self) -> None:
+        """Deliver what was published before this callback ran (later messages wait for
+        the next one, so callbacks scheduled meanwhile keep their turn)."""
+        batch, self._pending = self._pending, []
+        for topic, subs, msg in batch:
+            self._deliver(topic, subs, msg)
 
     def _deliver(self, topic: str, subs: list[_InProcessSubscription], msg: object) -> None:
         for sub in subs:
@@ -156,12 +169,19 @@ class InProcessTransport:
             try:
                 sub.callback(msg)
             except Exception as exc:
-                loop = self._loop
-                context = {
-                    "message": f"subscriber of {topic!r} raised {type(exc).__name__}: {exc}",
-                    "exception": exc,
-                }
-                if loop is not None:
-                    loop.call_exception_handler(context)
-                else:  # pragma: no cover - delivery always runs on a loop
-                    log.error(context["message"], exc_info=exc)
+                report_subscriber_error(self._loop, topic, exc)
+
+
+def report_subscriber_error(
+    loop: asyncio.AbstractEventLoop | None, topic: str, exc: Exception
+) -> None:
+    """A subscriber raised: tell the loop's exception handler (which logs it) and go on
+    delivering to the others."""
+    context = {
+        "message": f"subscriber of {topic!r} raised {type(exc).__name__}: {exc}",
+        "exception": exc,
+    }
+    if loop is not None:
+        loop.call_exception_handler(context)
+    else:  # pragma: no cover - delivery always runs on a loop
+        log.error(context["message"], exc_info=exc)

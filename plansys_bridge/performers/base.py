@@ -42,6 +42,7 @@ from plansys_bridge.hub.messages import (
     PerformerState,
     Topics,
 )
+from plansys_bridge.hub.routing import performer_keys
 from plansys_bridge.hub.transport import Subscription
 
 if TYPE_CHECKING:
@@ -154,7 +155,10 @@ class ActionPerformer(ABC):
         """Goals started so far."""
         self._committed: ActionGoal | None = None
         self._committed_bid: float | None = None
-        self._commit_timer: asyncio.TimerHandle | None = None
+        self._commit_deadline = 0.0
+        """Loop time the commitment lapses at (checked when it matters, no timer: a
+        timer per RESPONSE was a good part of an auction's cost with many bidders)."""
+        self._loop: asyncio.AbstractEventLoop | None = None
         self._task: asyncio.Task[None] | None = None
         self._cancelling = False
         self._subs: list[Subscription] = []
@@ -203,7 +207,19 @@ class ActionPerformer(ABC):
 
     @property
     def committed(self) -> ActionGoal | None:
-        return self._committed
+        """The request this performer answered and awaits CONFIRM/REJECT for."""
+        goal = self._committed
+        loop = self._loop
+        if goal is not None and loop is not None and loop.time() >= self._commit_deadline:
+            log.info(
+                "performer %s: no CONFIRM/REJECT for %s within %g s; bidding again",
+                self.node_name,
+                goal.full_name,
+                self.commit_timeout,
+            )
+            self._committed = None
+            return None
+        return goal
 
     async def start(self) -> None:
         """Run ``setup()``, subscribe to the hub and start the heartbeat."""
@@ -215,7 +231,10 @@ class ActionPerformer(ABC):
             self.state = PerformerState.FAILURE
             self._publish_status()
             raise
-        self._subs = [self.hub.subscribe(Topics.ACTIONS_HUB, self._on_action_msg)]
+        # Routed: REQUESTs for the actions served, and the messages naming this node.
+        keys = performer_keys(self.node_name, self.actions)
+        self._loop = asyncio.get_running_loop()
+        self._subs = [self.hub.subscribe(Topics.ACTIONS_HUB, self._on_action_msg, keys=keys)]
         self._running = True
         self.state = PerformerState.READY
         self._heartbeat()
@@ -281,15 +300,17 @@ class ActionPerformer(ABC):
         elif kind is ExecutionType.CONFIRM:
             self._on_confirm(msg)
         elif kind is ExecutionType.REJECT:
-            if self._committed is not None and _same(self._committed, msg):
+            committed = self.committed
+            if committed is not None and _same(committed, msg):
                 self._release_commitment()
         elif kind is ExecutionType.CANCEL:
             self._on_cancel_msg(msg)
 
     def _on_request(self, msg: ActionExecution) -> None:
         goal = ActionGoal(msg.action, tuple(msg.arguments), msg.request_id)
-        if self._committed is not None:
-            if self._committed == goal:
+        committed = self.committed
+        if committed is not None:
+            if committed == goal:
                 self._respond(goal, self._committed_bid)  # our RESPONSE may have been lost
             return
         if self._task is not None or not self.serves(goal):
@@ -305,32 +326,17 @@ class ActionPerformer(ABC):
             return
         self._committed = goal
         self._committed_bid = cost
-        loop = asyncio.get_running_loop()
-        self._commit_timer = loop.call_later(self.commit_timeout, self._commit_expired, goal)
+        self._commit_deadline = asyncio.get_running_loop().time() + self.commit_timeout
         self._respond(goal, cost)
 
     def _respond(self, goal: ActionGoal, cost: float | None) -> None:
         self._send(ExecutionType.RESPONSE, goal, bid=cost)
 
-    def _commit_expired(self, goal: ActionGoal) -> None:
-        if self._committed == goal:
-            log.info(
-                "performer %s: no CONFIRM/REJECT for %s within %g s; bidding again",
-                self.node_name,
-                goal.full_name,
-                self.commit_timeout,
-            )
-            self._committed = None
-            self._commit_timer = None
-
     def _release_commitment(self) -> None:
         self._committed = None
-        if self._commit_timer is not None:
-            self._commit_timer.cancel()
-            self._commit_timer = None
 
     def _on_confirm(self, msg: ActionExecution) -> None:
-        goal = self._committed
+        goal = self.committed
         if goal is None or not _same(goal, msg):
             return  # not (or no longer) committed to this request
         self._release_commitment()
@@ -345,7 +351,8 @@ class ActionPerformer(ABC):
         self._publish_status()
 
     def _on_cancel_msg(self, msg: ActionExecution) -> None:
-        if self._committed is not None and _same(self._committed, msg):
+        committed = self.committed
+        if committed is not None and _same(committed, msg):
             self._release_commitment()
             return
         goal, task = self.goal, self._task

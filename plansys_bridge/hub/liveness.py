@@ -1,0 +1,76 @@
+"""One table of performer heartbeats per hub, read by every auction client.
+
+Each performer sends a heartbeat per action it serves every second. When every
+:class:`~plansys_bridge.hub.auction.ActionClient` listened to them itself, a plan with
+many actions in flight and many performers spent most of its time handing heartbeats
+to clients that ignore them. The table takes each heartbeat once and keeps what the
+clients ask for:
+
+* when a node was last heard RUNNING (a confirmed performer's liveness: the client
+  reads it when its deadline comes instead of being told on every heartbeat);
+* a performer going from RUNNING to READY for an action: the clients waiting for a
+  performer of that action (``watch``) are told at once, so they ask again without
+  waiting for their next periodic REQUEST.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Callable
+
+from plansys_bridge.hub.messages import ActionPerformerStatus, PerformerState
+
+__all__ = ["LivenessTable"]
+
+FreedCallback = Callable[[ActionPerformerStatus], None]
+
+
+class LivenessTable:
+    """Heartbeats of ``performers_status``, one entry per node and action."""
+
+    def __init__(self) -> None:
+        self._states: dict[tuple[str, str], PerformerState] = {}
+        self._last_running: dict[str, float] = {}
+        self._watchers: dict[str, list[FreedCallback]] = {}
+        self.heartbeats = 0
+        """Heartbeats taken so far, for statistics."""
+
+    def on_status(self, msg: object) -> None:
+        """The ``performers_status`` subscriber."""
+        if not isinstance(msg, ActionPerformerStatus):
+            return
+        self.heartbeats += 1
+        key = (msg.node_name, msg.action)
+        previous = self._states.get(key)
+        self._states[key] = msg.state
+        if msg.state is PerformerState.RUNNING:
+            self._last_running[msg.node_name] = asyncio.get_running_loop().time()
+        elif (
+            msg.state is PerformerState.READY
+            and previous is PerformerState.RUNNING
+            and msg.action in self._watchers
+        ):
+            for callback in list(self._watchers[msg.action]):
+                callback(msg)
+
+    def last_running(self, node_name: str) -> float | None:
+        """Loop time of the last RUNNING heartbeat of ``node_name`` (None: never heard)."""
+        return self._last_running.get(node_name)
+
+    def state(self, node_name: str, action: str) -> PerformerState | None:
+        """The last state ``node_name`` reported for ``action``."""
+        return self._states.get((node_name, action))
+
+    def watch(self, action: str, callback: FreedCallback) -> Callable[[], None]:
+        """Call ``callback(status)`` when a performer of ``action`` goes from RUNNING to
+        READY; returns the function that stops watching."""
+        self._watchers[action] = [*self._watchers.get(action, ()), callback]
+
+        def unwatch() -> None:
+            remaining = [c for c in self._watchers.get(action, ()) if c is not callback]
+            if remaining:
+                self._watchers[action] = remaining
+            else:
+                self._watchers.pop(action, None)
+
+        return unwatch
