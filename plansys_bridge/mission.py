@@ -451,7 +451,7 @@ async def _run(
                 planning_s,
                 session.events_applied,
             )
-        await asyncio.sleep(0)  # the last messages of the plan reach the watch
+        await _heard_the_end(watch, result)
         watch.close()
         return MissionReport(
             mission.name,
@@ -462,6 +462,22 @@ async def _run(
             planning_s,
             list(session.events_applied),
         )
+
+
+async def _heard_the_end(watch: MissionWatch, result: ExecutionResult, wait: float = 2.0) -> None:
+    """Let the plan's last messages reach the watch before it closes.
+
+    In-process they are one loop turn away; over DDS a process hears its own
+    messages back through the network, so wait (``wait`` seconds at most) until the
+    watch saw every action's final status, or the last lines (a failure and why)
+    would go unprinted."""
+    await asyncio.sleep(0)
+    final = (ActionStatus.SUCCEEDED, ActionStatus.FAILED, ActionStatus.CANCELLED)
+    want = {(r.text, r.status) for r in result.actions if r.status in final}
+    loop = asyncio.get_running_loop()
+    deadline = loop.time() + wait
+    while loop.time() < deadline and not want <= {(a.text, a.status) for a in watch.actions}:
+        await asyncio.sleep(0.01)
 
 
 def default_missions_dir() -> Path:
