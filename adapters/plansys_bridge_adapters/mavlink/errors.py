@@ -49,4 +49,10 @@ class VehicleFault(MavlinkError):
     """The vehicle did something the action did not ask for.
 
     A failsafe, a mode changed by someone else, or a STATUSTEXT error.
+    ``took_over``: the vehicle (a failsafe) or someone else (a pilot, another ground
+    station) has taken control, so the adapter must not switch modes after it.
     """
+
+    def __init__(self, url: str, message: str, *, took_over: bool = False) -> None:
+        self.took_over = took_over
+        super().__init__(url, message)

@@ -40,8 +40,9 @@ from plansys_bridge.performers.base import (
 )
 
 from .double import VehicleDouble
-from .errors import CommandRefused, MavlinkError
+from .errors import MavlinkError, VehicleFault
 from .geo import GeoPoint, distance_3d_m, distance_m
+from .safety import make_safe, stop_safely
 from .settings import (
     SETTINGS_KEYS,
     Command,
@@ -136,6 +137,7 @@ class MavlinkPerformer(ActionPerformer):
             self.telemetry.stop()
             self.telemetry = None
         if self.vehicle is not None:
+            await stop_safely(self.vehicle, self.settings.safe_mode, self.settings.disarm_on_stop)
             await self.vehicle.close()
         if self.double is not None:
             await asyncio.get_running_loop().run_in_executor(None, self.double.stop)
@@ -169,6 +171,8 @@ class MavlinkPerformer(ActionPerformer):
         try:
             return str(await vehicle.supervise(run(vehicle, goal, cmd)))
         except MavlinkError as exc:
+            if not (isinstance(exc, VehicleFault) and exc.took_over):
+                await make_safe(vehicle, self.settings.safe_mode)
             raise ActionFailed(str(exc)) from exc
         finally:
             vehicle.expected_modes = frozenset()
@@ -215,21 +219,18 @@ class MavlinkPerformer(ActionPerformer):
             raise ActionFailed(f"{v.url}: {what} needs a copter, this vehicle is a {v.model}")
 
     async def _arm_ready(self, v: MavlinkVehicle) -> None:
-        """GUIDED, EKF ready, armed (retrying while arming checks fail)."""
+        """EKF ready, then GUIDED, then armed (retrying while arming checks fail).
+
+        The mode is set only once the EKF reports a horizontal position: before
+        that ArduPilot is still booting and drops a mode it accepted (the copter
+        falls back to its initial mode at "ArduPilot Ready", the rover follows its
+        RC mode channel once RC input arrives).
+        """
         t = self.settings.timeouts
-        try:
-            await v.set_mode("GUIDED")  # ArduPilot allows any mode while disarmed
-        except CommandRefused:
-            if v.ekf_ready():
-                raise
-            guided_later = True  # firmware that wants a position first
-        else:
-            guided_later = False
         if not v.ekf_ready():
             self._progress(0.0, "waiting for the EKF to use GPS")
             await v.wait_ekf(t.ekf)
-        if guided_later:
-            await v.set_mode("GUIDED")
+        await v.set_mode("GUIDED")
         if not v.telemetry.armed:
             self._progress(0.0, "arming")
             await v.arm(t.arm)
@@ -260,7 +261,12 @@ class MavlinkPerformer(ActionPerformer):
         target = self._target(goal, cmd, home or pos)
         name = goal.arguments[cmd.target_arg]
         if v.model == "copter":
-            if not v.telemetry.armed or pos.alt < self.settings.altitude_tolerance:
+            on_ground = not v.telemetry.armed or pos.alt < self.settings.altitude_tolerance
+            if on_ground and cmd.takeoff:
+                alt = cmd.altitude if cmd.altitude is not None else self.settings.cruise_altitude
+                await self._do_takeoff(v, goal, Command("takeoff", altitude=alt))
+                on_ground = False
+            if on_ground:
                 raise ActionFailed(
                     f"{v.url}: the copter is on the ground; take off before flying to {name}"
                 )
@@ -279,9 +285,13 @@ class MavlinkPerformer(ActionPerformer):
         loop = asyncio.get_running_loop()
         deadline = loop.time() + s.timeouts.action
         last_send = -1e9
+        guided = v.mode_number("GUIDED")
         while True:
             now = loop.time()
             if now - last_send >= s.resend_period:
+                if v.telemetry.custom_mode != guided:
+                    # ArduPilot ignores targets outside GUIDED, without an answer
+                    raise ActionFailed(f"{v.url}: the vehicle left GUIDED (now {v.mode})")
                 v.send_position_target(target)
                 last_send = now
             here = v.telemetry.position or start

@@ -16,6 +16,7 @@ from plansys_bridge.errors import ConfigError
 from ..checks import mapping, positive
 from .locations import LocationMap, load_locations
 from .modes import Model
+from .safety import SAFE_MODES
 from .telemetry import TelemetryConfig
 from .vehicle import DEFAULT_TELEMETRY_HZ
 
@@ -35,10 +36,12 @@ SETTINGS_KEYS = frozenset(
         "timeouts",
         "telemetry",
         "telemetry_hz",
+        "safe_mode",
+        "disarm_on_stop",
     }
 )
 DOES = ("takeoff", "goto", "land", "rtl", "hold")
-_COMMAND_KEYS = frozenset({"do", "vehicle_arg", "target_arg", "altitude", "seconds"})
+_COMMAND_KEYS = frozenset({"do", "vehicle_arg", "target_arg", "altitude", "seconds", "takeoff"})
 _DOUBLE_KEYS = frozenset(
     {
         "model",
@@ -65,6 +68,8 @@ class Command:
     target_arg: int = -1
     altitude: float | None = None
     seconds: float | None = None
+    takeoff: bool = False
+    """goto: a copter on the ground takes off (to ``altitude``) first."""
 
 
 @dataclass(frozen=True)
@@ -97,6 +102,11 @@ class MavlinkSettings:
     timeouts: Timeouts = field(default_factory=Timeouts)
     telemetry: TelemetryConfig = field(default_factory=TelemetryConfig)
     telemetry_hz: Mapping[str, float] = field(default_factory=lambda: dict(DEFAULT_TELEMETRY_HZ))
+    safe_mode: str | None = None
+    """Mode for a vehicle still in GUIDED after a failed action or at the end
+    (copter BRAKE, LAND, RTL, ...; rover HOLD, ...); None: the model's default."""
+    disarm_on_stop: bool = True
+    """Disarm a vehicle left armed on the ground when the performer stops."""
 
 
 def default_command(action: str) -> Command:
@@ -201,7 +211,23 @@ def parse_settings(raw: Mapping[str, Any], name: str, base_dir: Path, key: str) 
         values["telemetry_hz"] = {
             str(m).upper(): positive(r, f"{key}.telemetry_hz.{m}") for m, r in hz.items()
         }
+    if raw.get("safe_mode") is not None:
+        values["safe_mode"] = _safe_mode(raw["safe_mode"], values.get("model"), f"{key}.safe_mode")
+    if "disarm_on_stop" in raw:
+        flag = raw["disarm_on_stop"]
+        if not isinstance(flag, bool):
+            raise ConfigError(f"must be true or false, got {flag!r}", key=f"{key}.disarm_on_stop")
+        values["disarm_on_stop"] = flag
     return MavlinkSettings(**values)
+
+
+def _safe_mode(value: object, model: Model | None, key: str) -> str:
+    models: tuple[Model, ...] = (model,) if model is not None else ("copter", "rover")
+    allowed = sorted({m for each in models for m in SAFE_MODES[each]})
+    name = value.upper() if isinstance(value, str) else value
+    if name not in allowed:
+        raise ConfigError(f"must be one of {', '.join(allowed)}, got {value!r}", key=key)
+    return str(name)
 
 
 def _command(value: object, key: str) -> Command:
@@ -223,6 +249,13 @@ def _command(value: object, key: str) -> Command:
     for k in ("altitude", "seconds"):
         if k in value:
             fields[k] = positive(value[k], f"{key}.{k}")
+    if "takeoff" in value:
+        if not isinstance(value["takeoff"], bool) or do != "goto":
+            raise ConfigError(
+                f"must be true or false, on a goto command, got {value['takeoff']!r}",
+                key=f"{key}.takeoff",
+            )
+        fields["takeoff"] = value["takeoff"]
     return Command(**fields)
 
 

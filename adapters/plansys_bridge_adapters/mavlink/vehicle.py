@@ -151,6 +151,10 @@ class MavlinkVehicle:
         self._listeners: list[Callable[[Any], None]] = []
         self._connected = False
         self._closed_by_us = False
+        self.boot_fallbacks = 0
+        self.in_control = True
+        """False once a failsafe or someone else took the vehicle, until we set a mode."""
+        """Mode changes ArduPilot made on its own while booting (not takeovers)."""
 
     # ------------------------------------------------------------ connection
     @property
@@ -348,13 +352,20 @@ class MavlinkVehicle:
         if not self.expected_modes or mode in self.expected_modes:
             return
         name = self.mode_name_of(mode)
+        if self.booting():
+            # ArduPilot accepts a mode while it boots, then sets its initial mode when
+            # boot completes (copter: INITIAL_MODE at "ArduPilot Ready"; rover: the RC
+            # mode channel once RC input arrives). Nobody took the vehicle over.
+            log.info("%s: mode fell back to %s while the vehicle booted", self.url, name)
+            self.boot_fallbacks += 1
+            return
         expected = "/".join(sorted(self.mode_name_of(m) for m in self.expected_modes))
         failsafe = self._recent_failsafe()
         if failsafe is not None:
             text = f"failsafe: {failsafe.text!r}, mode now {name}"
         else:
             text = f"mode changed to {name} by someone else (expected {expected})"
-        self._raise_fault(VehicleFault(self.url, text))
+        self._raise_fault(VehicleFault(self.url, text, took_over=True))
 
     def _on_position(self, msg: Any) -> None:
         tel = self.telemetry
@@ -389,7 +400,7 @@ class MavlinkVehicle:
         if lowered.startswith(ARMING_TEXT_PREFIXES):
             return  # arming checks explain refusals; arm() reports them
         if "failsafe" in lowered:
-            self._raise_fault(VehicleFault(self.url, f"failsafe: {text!r}"))
+            self._raise_fault(VehicleFault(self.url, f"failsafe: {text!r}", took_over=True))
         elif entry.severity <= ML.MAV_SEVERITY_ERROR:
             self._raise_fault(
                 VehicleFault(self.url, f"vehicle reported {entry.severity_name}: {text!r}")
@@ -397,6 +408,8 @@ class MavlinkVehicle:
 
     # ------------------------------------------------------------- faults
     def _raise_fault(self, error: MavlinkError) -> None:
+        if isinstance(error, VehicleFault) and error.took_over:
+            self.in_control = False
         fault = self._fault
         if fault is not None and not fault.done():
             fault.set_result(error)
@@ -610,6 +623,7 @@ class MavlinkVehicle:
         """MAV_CMD_DO_SET_MODE and wait until a HEARTBEAT shows the mode."""
         number = self.mode_number(name)
         old = self.telemetry.custom_mode
+        self.in_control = True
         if old == number:
             self.expected_modes = frozenset({number})
             return
@@ -627,6 +641,11 @@ class MavlinkVehicle:
         )
         self.expected_modes = frozenset({number})
 
+    def booting(self) -> bool:
+        """Disarmed and without a position estimate yet: ArduPilot may still change
+        its mode on its own (boot-time fallback), so modes set now do not stick."""
+        return not self.telemetry.armed and not self.ekf_ready()
+
     def ekf_ready(self) -> bool:
         flags = self.telemetry.ekf_flags
         return flags is not None and flags & EKF_NEEDED == EKF_NEEDED and not flags & EKF_BAD
@@ -640,16 +659,26 @@ class MavlinkVehicle:
 
         SYS_STATUS's pre-arm bit flickers on ArduPilot, so the only reliable test
         is to try: a refusal comes with ``PreArm: ...`` STATUSTEXTs that name why.
+        A reason that belongs to a vehicle still starting up (no position estimate,
+        sensors settling) is retried; any other reason given twice in a row (a
+        battery below its arming voltage, a failing check) will not go away by
+        waiting and fails at once with the vehicle's words.
         """
         loop = asyncio.get_running_loop()
         deadline = loop.time() + timeout
         start = self._now()
+        previous: str | None = None
         while not self.telemetry.armed:
+            tried = self._now()
             try:
                 await self.command(ML.MAV_CMD_COMPONENT_ARM_DISARM, 1)
             except CommandRefused as exc:
                 if exc.result not in ("MAV_RESULT_FAILED", "MAV_RESULT_TEMPORARILY_REJECTED"):
                     raise
+                reason = self._arming_texts(tried) or exc.reason
+                if reason and reason == previous and not _starting_up(reason):
+                    raise CommandRefused(self.url, "arming", exc.result, reason) from exc
+                previous = reason
                 if loop.time() + retry_period > deadline:
                     why = self._arming_texts(start) or exc.reason
                     raise CommandRefused(
@@ -769,6 +798,24 @@ _HANDLERS: dict[str, Callable[[MavlinkVehicle, Any], None]] = {
     "COMMAND_ACK": MavlinkVehicle._on_ack,
     "STATUSTEXT": MavlinkVehicle._on_statustext,
 }
+
+
+STARTING_UP_WORDS = (
+    "position estimate",
+    "waiting",
+    "initialising",
+    "initializing",
+    "settling",
+    "calibrating",
+    "ekf",
+    "ahrs",
+)
+"""Arming refusals that a vehicle still starting up gives (retried, not final)."""
+
+
+def _starting_up(reason: str) -> bool:
+    lowered = reason.lower()
+    return any(word in lowered for word in STARTING_UP_WORDS)
 
 
 def _enum_name(enum: str, value: int) -> str:

@@ -80,6 +80,8 @@ def test_rover_heartbeat_and_modes() -> None:
         try:
             hb = client.until(lambda m: m.get_type() == "HEARTBEAT")
             assert hb.type == 10
+            # after RC input has put the rover in MANUAL (2.8 s), a mode sticks
+            assert double.wait_for(lambda s: s["time"] > 3.0, 5)
             assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, 15) == ml.MAV_RESULT_ACCEPTED
             client.until(lambda m: m.get_type() == "HEARTBEAT" and m.custom_mode == 15)
             # 6 is FOLLOW on a rover but 9 (LAND) does not exist there

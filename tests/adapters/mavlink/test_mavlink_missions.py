@@ -32,7 +32,7 @@ def fast(data: dict[str, Any]) -> dict[str, Any]:
             entry["double"] = {**entry["double"], "speedup": SPEEDUP, "ekf_delay": 4.0}
         entry["timeouts"] = FAST_TIMEOUTS
         entry["heartbeat_period"] = 0.2
-    data["auction"] = {"retry_period": 0.2, "liveness_timeout": 3.0}
+    data["auction"] = {**data.get("auction", {}), "retry_period": 0.2, "liveness_timeout": 3.0}
     return data
 
 
@@ -64,6 +64,20 @@ def test_single_vehicle_missions() -> None:
     for name in ("mavlink_copter.yaml", "mavlink_rover.yaml"):
         report = run(fast(load(name)))
         assert report.success, f"{name}: {report.summary()}"
+
+
+def test_nearest_vehicle_wins_each_visit() -> None:
+    # the plan names no vehicle: each visit goes to the lowest bid, the nearest one
+    report = run(fast(load("mavlink_nearest.yaml")))
+    assert report.success, report.summary()
+    assert report.result is not None
+    visits = {r.text: r.performer for r in report.result.actions if r.text.startswith("(visit")}
+    assert visits == {
+        "(visit tower)": "uav1_performer",
+        "(visit orchard)": "uav2_performer",
+        "(visit gate)": "ugv1_performer",
+    }
+    assert all(r.status == ActionStatus.SUCCEEDED for r in report.result.actions)
 
 
 def copter_mission_with_fault(inject: Any, max_replans: int) -> tuple[str, MissionReport]:

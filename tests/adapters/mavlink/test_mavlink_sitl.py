@@ -1,69 +1,111 @@
-"""The shipped missions against a real ArduPilot SITL (skipped unless one is given).
+"""The shipped missions against real ArduPilot SITL, through ``plansys-bridge run``.
 
-Start SITL (any speedup; ``--speedup 1`` and ``--speedup 5`` are both expected to
-pass from a fresh boot, EKF wait included) and point the tests at it::
-
-    sim_vehicle.py -v ArduCopter -I0 --speedup 5     # tcp:127.0.0.1:5760
-    sim_vehicle.py -v Rover -I1 --speedup 5          # tcp:127.0.0.1:5770
-    ARDUPILOT_SITL_COPTER_URL=tcp:127.0.0.1:5760 \\
-    ARDUPILOT_SITL_ROVER_URL=tcp:127.0.0.1:5770 pytest -m sitl tests/adapters/mavlink
+Each test starts its own SITL instances (fresh working directory, wiped eeprom) from
+``$PLANSYS_BRIDGE_SITL_DIR`` and is skipped, naming the variable, without it. The
+missions are the shipped files with ``url:`` pointing at SITL; every one must end
+SUCCEEDED with no action failed or halted, and the vehicles landed (copter, LAND,
+disarmed) or held (rover, HOLD, disarmed), as a second ground station sees them.
 """
 
 from __future__ import annotations
 
-import os
-from typing import Any
+from pathlib import Path
 
 import pytest
-import yaml
-from mavlink_support import CONFIGS
-
-from plansys_bridge.mission import run_mission
-from plansys_bridge.mission_config import mission_from_dict
-
-COPTER_URL = os.environ.get("ARDUPILOT_SITL_COPTER_URL", "")
-ROVER_URL = os.environ.get("ARDUPILOT_SITL_ROVER_URL", "")
-SITL_TIMEOUTS = {"connect": 60, "heartbeat": 5, "command": 2, "ekf": 300, "arm": 120, "action": 600}
+from plansys_bridge_adapters.mavlink.geo import GeoPoint
+from plansys_bridge_adapters.mavlink.modes import Model
+from plansys_bridge_adapters.mavlink.sitl import DEFAULT_HOME
+from sitl_support import (
+    GroundStation,
+    Sitl,
+    assert_succeeded,
+    finish_cli,
+    run_cli,
+    sitl_mission,
+    start_cli,
+)
 
 pytestmark = pytest.mark.sitl
 
-
-def _with_urls(name: str, urls: dict[str, str]) -> dict[str, Any]:
-    data = yaml.safe_load((CONFIGS / name).read_text())
-    for entry in data["performers"]:
-        entry.pop("double", None)
-        entry["url"] = urls[entry["model"]]
-        entry["timeouts"] = SITL_TIMEOUTS
-    data["timeout"] = 1800
-    return data
+SPEEDUP = 10.0
 
 
-def _run(name: str, urls: dict[str, str]) -> None:
-    mission = mission_from_dict(_with_urls(name, urls), source=name, base_dir=CONFIGS)
-    lines: list[str] = []
-    report = run_mission(mission, out=lines.append)
-    assert report.success, report.summary() + "\n" + "\n".join(lines)
+def assert_parked(gcs: GroundStation, mode: str) -> None:
+    """The vehicle ends disarmed in ``mode`` (seen in its HEARTBEAT)."""
+    gcs.wait(lambda s: bool(s.modes) and s.modes[-1][1] == mode, 10, f"mode {mode}")
+    gcs.wait(lambda s: bool(s.armed) and not s.armed[-1][1], 10, "disarmed")
 
 
-@pytest.mark.skipif(
-    not COPTER_URL,
-    reason="set ARDUPILOT_SITL_COPTER_URL (e.g. tcp:127.0.0.1:5760) to fly a real ArduCopter SITL",
-)
-def test_copter_mission_on_sitl() -> None:
-    _run("mavlink_copter.yaml", {"copter": COPTER_URL})
+def test_copter_survey_with_a_second_ground_station(sitl: Sitl, tmp_path: Path) -> None:
+    copter = sitl.start("copter", speedup=SPEEDUP)
+    mission = sitl_mission("mavlink_copter.yaml", {"uav1": copter.url}, tmp_path)
+    with GroundStation(copter.gcs_url, "copter") as gcs:
+        proc = start_cli(mission)
+        gcs.stream("GLOBAL_POSITION_INT", 4)
+        # the second ground station sees the flight and reads parameters during it
+        gcs.wait(lambda s: s.max_alt > 5, 120, "the copter to climb")
+        speed = gcs.param("WPNAV_SPEED")
+        sysid = gcs.param("SYSID_THISMAV")
+        report = finish_cli(proc)
+        assert_succeeded(report)
+        assert [r["action"].split()[0] for r in report["records"]] == [
+            "(takeoff",
+            "(fly",
+            "(fly",
+            "(fly",
+            "(land",
+        ]
+        assert_parked(gcs, "LAND")
+        modes = [m for _, m in gcs.seen.modes]
+        assert "GUIDED" in modes and modes[-1] == "LAND"
+        assert gcs.seen.max_alt > 14  # north_field is at 15 m
+        assert gcs.seen.north_max > 55  # north_field is 60 m north of the pad
+    assert speed > 0 and sysid == 1
 
 
-@pytest.mark.skipif(
-    not ROVER_URL,
-    reason="set ARDUPILOT_SITL_ROVER_URL (e.g. tcp:127.0.0.1:5770) to drive a real ArduRover SITL",
-)
-def test_rover_mission_on_sitl() -> None:
-    _run("mavlink_rover.yaml", {"rover": ROVER_URL})
+def test_rover_patrol(sitl: Sitl, tmp_path: Path) -> None:
+    rover = sitl.start("rover", speedup=SPEEDUP)
+    mission = sitl_mission("mavlink_rover.yaml", {"ugv1": rover.url}, tmp_path)
+    with GroundStation(rover.gcs_url, "rover") as gcs:
+        report = run_cli(mission)
+        assert_succeeded(report)
+        assert len(report["records"]) == 3
+        assert_parked(gcs, "HOLD")
 
 
-@pytest.mark.skipif(
-    not (COPTER_URL and ROVER_URL),
-    reason="set both ARDUPILOT_SITL_COPTER_URL and ARDUPILOT_SITL_ROVER_URL for the fleet mission",
-)
-def test_fleet_mission_on_sitl() -> None:
-    _run("mavlink_fleet.yaml", {"copter": COPTER_URL, "rover": ROVER_URL})
+def test_fleet_one_vehicle_in_real_time_one_faster(sitl: Sitl, tmp_path: Path) -> None:
+    # the rover at speedup 1 (real time), the copter at 10: the adapter runs both at once
+    home = GeoPoint(DEFAULT_HOME.lat, 149.165600, DEFAULT_HOME.alt)
+    copter = sitl.start("copter", speedup=SPEEDUP)
+    rover = sitl.start("rover", speedup=1.0, home=home)
+    urls = {"uav1": copter.url, "ugv1": rover.url}
+    mission = sitl_mission("mavlink_fleet.yaml", urls, tmp_path)
+    with GroundStation(copter.gcs_url, "copter") as air, GroundStation(rover.gcs_url) as ground:
+        report = run_cli(mission)
+        assert_succeeded(report)
+        by = {r["action"]: r["performer"] for r in report["records"]}
+        assert all(p == "uav1_performer" for a, p in by.items() if " uav1 " in a)
+        assert all(p == "ugv1_performer" for a, p in by.items() if " ugv1 " in a)
+        assert_parked(air, "LAND")
+        assert_parked(ground, "HOLD")
+
+
+def test_nearest_vehicle_wins_each_visit(sitl: Sitl, tmp_path: Path) -> None:
+    homes: dict[str, tuple[Model, GeoPoint]] = {
+        "uav1": ("copter", GeoPoint(-35.363261, 149.165230, 584.0)),
+        "uav2": ("copter", GeoPoint(-35.363261, 149.166332, 584.0)),
+        "ugv1": ("rover", GeoPoint(-35.362363, 149.165230, 584.0)),
+    }
+    started = {v: sitl.start(m, speedup=SPEEDUP, home=h) for v, (m, h) in homes.items()}
+    mission = sitl_mission("mavlink_nearest.yaml", {v: s.url for v, s in started.items()}, tmp_path)
+    report = run_cli(mission)
+    assert_succeeded(report)
+    visits = {r["action"]: r["performer"] for r in report["records"] if "visit" in r["action"]}
+    assert visits == {
+        "(visit tower)": "uav1_performer",
+        "(visit orchard)": "uav2_performer",
+        "(visit gate)": "ugv1_performer",
+    }
+    for vehicle, proc in started.items():
+        with GroundStation(proc.gcs_url, homes[vehicle][0]) as gcs:
+            assert_parked(gcs, "LAND" if homes[vehicle][0] == "copter" else "HOLD")

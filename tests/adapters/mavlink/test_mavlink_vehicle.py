@@ -39,8 +39,9 @@ def with_vehicle(url: str, body: Callable[[MavlinkVehicle], Awaitable[None]]) ->
 
 
 async def arm_guided(v: MavlinkVehicle) -> None:
-    await v.set_mode("GUIDED")
+    # ArduPilot's order: a mode set before the EKF has a position is lost at boot
     await v.wait_ekf(10)
+    await v.set_mode("GUIDED")
     await v.arm(5)
 
 

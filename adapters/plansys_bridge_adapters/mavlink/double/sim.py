@@ -97,8 +97,14 @@ class SimParams:
 
     model: Model = "copter"
     home: GeoPoint = field(default_factory=lambda: GeoPoint(-35.363261, 149.165230, 584.0))
-    ekf_delay: float = 20.0
-    """Seconds after the first client connects until the EKF uses GPS (SITL: ~45 s)."""
+    ekf_delay: float = 42.0
+    """Seconds after the first client connects until the EKF uses GPS (SITL: ~42 s)."""
+    boot_delay: float = 1.0
+    """Seconds until "ArduPilot Ready": the end of boot, when ArduPilot sets its
+    initial mode over whatever mode a ground station set while it booted."""
+    rc_mode_delay: float = 2.8
+    """Rover: seconds until RC input arrives and the mode channel (RC 8, held at
+    1800 by SITL) switches the rover to MANUAL, silently dropping an earlier mode."""
     disarm_delay: float = 10.0
     """DISARM_DELAY: a copter armed and idle on the ground disarms after this."""
     cruise_speed: float = 10.0
@@ -129,6 +135,8 @@ class VehicleSim:
         )
         self.time = 0.0
         self.started = False
+        self.booted = False
+        self.rc_mode_read = self.model != "rover"
         self.armed = False
         self.mode = mode_number(self.model, "STABILIZE" if self.model == "copter" else "MANUAL")
         self.north = 0.0
@@ -413,6 +421,7 @@ class VehicleSim:
         if not self.started or dt <= 0:
             return
         self.time += dt
+        self._boot()
         if not self.ekf_ready and self.time >= self.p.ekf_delay:
             self.ekf_ready = True
             self.statustext(ML.MAV_SEVERITY_INFO, "EKF3 IMU0 is using GPS")
@@ -425,6 +434,18 @@ class VehicleSim:
             self._check_battery()
             self._auto_disarm()
         self._stream()
+
+    def _boot(self) -> None:
+        # SITL's order whatever the delays: boot ends, RC input arrives, then the EKF
+        # uses GPS (a short ekf_delay for fast tests brings the first two forward).
+        if not self.booted and self.time >= min(self.p.boot_delay, self.p.ekf_delay):
+            self.booted = True
+            initial = "STABILIZE" if self.model == "copter" else "MANUAL"
+            self._enter_mode(mode_number(self.model, initial))
+            self.statustext(ML.MAV_SEVERITY_INFO, "ArduPilot Ready")
+        if not self.rc_mode_read and self.time >= min(self.p.rc_mode_delay, self.p.ekf_delay):
+            self.rc_mode_read = True
+            self._enter_mode(mode_number(self.model, "MANUAL"))
 
     def _check_battery(self) -> None:
         if (

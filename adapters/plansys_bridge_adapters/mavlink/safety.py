@@ -1,0 +1,73 @@
+"""Leaving a vehicle safe after a failed action and when its performer stops.
+
+The rule: the adapter only makes safe a vehicle it still controls, that is one in
+GUIDED, the mode the adapter flies in. A vehicle that changed mode on its own (a
+failsafe: RTL, LAND, HOLD) or was taken over by a pilot or another ground station
+is left alone: ArduPilot or that person already decided, and switching modes back
+would fight them.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+
+from .errors import MavlinkError
+from .modes import Model
+from .vehicle import MavlinkVehicle
+
+log = logging.getLogger(__name__)
+
+SAFE_MODES: dict[Model, tuple[str, ...]] = {
+    "copter": ("BRAKE", "LAND", "RTL", "LOITER", "SMART_RTL"),
+    "rover": ("HOLD", "RTL", "LOITER", "SMART_RTL"),
+}
+"""Modes ``safe_mode`` may name, the first being the default."""
+SAFE_TIMEOUT = 1.5
+"""Seconds one safe-mode switch may take; the action's failure is reported after it."""
+
+
+def safe_mode_for(model: Model | None, configured: str | None) -> str:
+    """The configured safe mode if it suits ``model``, else the model's default."""
+    modes = SAFE_MODES[model or "copter"]
+    return configured if configured in modes else modes[0]
+
+
+async def make_safe(vehicle: MavlinkVehicle, configured: str | None) -> str | None:
+    """Switch an armed vehicle still in GUIDED to its safe mode; returns the mode set.
+
+    Bounded by :data:`SAFE_TIMEOUT` so a failure is reported promptly even when the
+    vehicle does not answer.
+    """
+    if not vehicle.connected or not vehicle.telemetry.armed or vehicle.mode != "GUIDED":
+        return None
+    if not vehicle.in_control:
+        return None  # a failsafe or someone else has it (its HEARTBEAT may lag)
+    mode = safe_mode_for(vehicle.model, configured)
+    vehicle.expected_modes = frozenset()
+    try:
+        async with asyncio.timeout(SAFE_TIMEOUT):
+            await vehicle.set_mode(mode, timeout=SAFE_TIMEOUT)
+    except (MavlinkError, TimeoutError) as exc:
+        log.warning("%s: could not switch to %s after a failure: %s", vehicle.url, mode, exc)
+        return None
+    finally:
+        vehicle.expected_modes = frozenset()
+    return mode
+
+
+async def stop_safely(vehicle: MavlinkVehicle, configured: str | None, disarm: bool) -> None:
+    """At the end: a vehicle in GUIDED is put in its safe mode (a rover stops in
+    HOLD), and one on the ground is disarmed when ``disarm`` says so."""
+    await make_safe(vehicle, configured)
+    if not disarm or not vehicle.connected or not vehicle.telemetry.armed:
+        return
+    position = vehicle.telemetry.position
+    airborne = vehicle.model == "copter" and (position is None or position.alt > 0.5)
+    if airborne:
+        return
+    try:
+        async with asyncio.timeout(SAFE_TIMEOUT * 2):
+            await vehicle.disarm()
+    except (MavlinkError, TimeoutError) as exc:
+        log.warning("%s: could not disarm at the end: %s", vehicle.url, exc)

@@ -1,0 +1,327 @@
+"""Helpers for the tests against real ArduPilot SITL (imported as ``sitl_support``).
+
+* :class:`Sitl`: the instances one test started (the ``sitl`` fixture);
+* :class:`GroundStation`: a second ground station (pymavlink) on another SITL port:
+  watches HEARTBEAT, position and STATUSTEXT, reads and sets parameters, changes
+  the mode, as Mission Planner or MAVProxy would next to the adapter;
+* :func:`sitl_mission`: a shipped mission file with its vehicles pointed at SITL;
+* :func:`run_cli`: ``plansys-bridge run MISSION --json`` in a child process.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+from mavlink_support import CONFIGS
+from plansys_bridge_adapters.mavlink.geo import GeoPoint
+from plansys_bridge_adapters.mavlink.modes import Model, mode_name, mode_number, model_of_type
+from plansys_bridge_adapters.mavlink.sitl import DEFAULT_HOME, SitlProcess, instance_free
+from pymavlink import mavutil
+from pymavlink.dialects.v20 import ardupilotmega as ml
+
+SITL_TIMEOUTS = {"connect": 60, "heartbeat": 5, "command": 2, "ekf": 240, "arm": 60, "action": 300}
+"""Wall-clock limits for SITL runs (the EKF takes ~42 simulated seconds)."""
+GCS_SYSID = 250
+"""The second ground station's system id: not the adapter's 255, so ArduPilot keeps
+their links apart and its GCS failsafe keeps watching the adapter's heartbeat."""
+
+
+@dataclass
+class Seen:
+    """What the ground station heard, with wall-clock stamps (``time.time()``)."""
+
+    modes: list[tuple[float, str]] = field(default_factory=list)
+    """Each mode change (and the first HEARTBEAT's mode)."""
+    armed: list[tuple[float, bool]] = field(default_factory=list)
+    texts: list[tuple[float, int, str]] = field(default_factory=list)
+    max_alt: float = 0.0
+    alt: float = 0.0
+    north_max: float = 0.0
+    params: dict[str, float] = field(default_factory=dict)
+    position: tuple[float, float] | None = None
+
+
+class GroundStation:
+    """A pymavlink ground station on one SITL port, read by a background thread."""
+
+    def __init__(self, url: str, model: Model | None = None) -> None:
+        self.url = url
+        self.model = model
+        self.seen = Seen()
+        self.conn: Any = None
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.home: tuple[float, float] | None = None
+
+    def __enter__(self) -> GroundStation:
+        deadline = time.monotonic() + 30
+        while True:
+            try:
+                conn = mavutil.mavlink_connection(
+                    self.url, source_system=GCS_SYSID, source_component=190, retries=0
+                )
+                break
+            except OSError:
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.2)
+        conn.mav = ml.MAVLink(conn, srcSystem=GCS_SYSID, srcComponent=190)
+        conn.mav.robust_parsing = True
+        self.conn = conn
+        self._thread = threading.Thread(target=self._read, name="sitl-gcs", daemon=True)
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(5)
+        with contextlib.suppress(Exception):
+            self.conn.close()
+
+    # --------------------------------------------------------------- reading
+    def _read(self) -> None:
+        last_hb = 0.0
+        while not self._stop.is_set():
+            now = time.monotonic()
+            if now - last_hb > 1.0:
+                last_hb = now
+                with contextlib.suppress(OSError):
+                    self.conn.mav.heartbeat_send(6, 8, 0, 0, ml.MAV_STATE_ACTIVE)
+            try:
+                msg = self.conn.recv_match(blocking=True, timeout=0.1)
+            except (OSError, ValueError):
+                return
+            if msg is not None and msg.get_srcSystem() != GCS_SYSID:
+                with self._lock:
+                    self._on(msg)
+
+    def _on(self, msg: Any) -> None:
+        kind, stamp, seen = msg.get_type(), time.time(), self.seen
+        if kind == "HEARTBEAT" and msg.get_srcComponent() == 1 and msg.type not in (6, 27):
+            self.model = self.model or model_of_type(msg.type)
+            name = mode_name(self.model or "copter", msg.custom_mode)
+            if not seen.modes or seen.modes[-1][1] != name:
+                seen.modes.append((stamp, name))
+            armed = bool(msg.base_mode & ml.MAV_MODE_FLAG_SAFETY_ARMED)
+            if not seen.armed or seen.armed[-1][1] != armed:
+                seen.armed.append((stamp, armed))
+        elif kind == "GLOBAL_POSITION_INT":
+            seen.alt = msg.relative_alt / 1000
+            seen.max_alt = max(seen.max_alt, seen.alt)
+            seen.position = (msg.lat / 1e7, msg.lon / 1e7)
+            if self.home is None:
+                self.home = seen.position
+            seen.north_max = max(seen.north_max, (seen.position[0] - self.home[0]) * 111_195)
+        elif kind == "STATUSTEXT":
+            seen.texts.append((stamp, msg.severity, msg.text))
+        elif kind == "PARAM_VALUE":
+            seen.params[msg.param_id] = float(msg.param_value)
+
+    def wait(self, predicate: Callable[[Seen], bool], timeout: float, what: str) -> None:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            with self._lock:
+                if predicate(self.seen):
+                    return
+            time.sleep(0.02)
+        raise AssertionError(f"{self.url}: timed out after {timeout:g} s waiting for {what}")
+
+    @property
+    def mode(self) -> str:
+        with self._lock:
+            return self.seen.modes[-1][1] if self.seen.modes else "UNKNOWN"
+
+    @property
+    def armed(self) -> bool:
+        with self._lock:
+            return bool(self.seen.armed and self.seen.armed[-1][1])
+
+    def text_time(self, fragment: str) -> float | None:
+        """Wall time of the first STATUSTEXT containing ``fragment`` (case-insensitive)."""
+        with self._lock:
+            for stamp, _, text in self.seen.texts:
+                if fragment.lower() in text.lower():
+                    return stamp
+        return None
+
+    # --------------------------------------------------------------- talking
+    def stream(self, message: str, hz: float) -> None:
+        """Ask for ``message`` on this ground station's own link."""
+        msg_id = getattr(ml, f"MAVLINK_MSG_ID_{message}")
+        self._command(ml.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, 1e6 / hz)
+
+    def _command(self, command: int, *params: float) -> None:
+        p = [float(x) for x in params] + [0.0] * (7 - len(params))
+        self.conn.mav.command_long_send(1, 1, command, 0, *p)
+
+    def set_mode(self, name: str) -> None:
+        """MAV_CMD_DO_SET_MODE from this ground station (a takeover)."""
+        number = mode_number(self.model or "copter", name)
+        self._command(ml.MAV_CMD_DO_SET_MODE, ml.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, number)
+
+    def param(self, name: str, timeout: float = 10.0) -> float:
+        """Read one parameter (PARAM_REQUEST_READ), retrying until PARAM_VALUE comes."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            self.conn.mav.param_request_read_send(1, 1, name.encode(), -1)
+            end = min(deadline, time.monotonic() + 1.0)
+            while time.monotonic() < end:
+                with self._lock:
+                    if name in self.seen.params:
+                        return self.seen.params.pop(name)
+                time.sleep(0.02)
+        raise AssertionError(f"{self.url}: no PARAM_VALUE for {name} within {timeout:g} s")
+
+    def set_param(self, name: str, value: float, timeout: float = 10.0) -> None:
+        """PARAM_SET until the vehicle echoes the new value."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            with self._lock:
+                self.seen.params.pop(name, None)
+            self.conn.mav.param_set_send(1, 1, name.encode(), value, ml.MAV_PARAM_TYPE_REAL32)
+            end = min(deadline, time.monotonic() + 1.0)
+            while time.monotonic() < end:
+                with self._lock:
+                    got = self.seen.params.get(name)
+                if got is not None and abs(got - value) < 1e-3:
+                    return
+                time.sleep(0.02)
+        raise AssertionError(f"{self.url}: {name} not set to {value} within {timeout:g} s")
+
+
+class Sitl:
+    """Starts ArduPilot SITL instances for one test and stops them (by pid) after it."""
+
+    def __init__(self, folder: Path, workdir: Path) -> None:
+        self.folder = folder
+        self.workdir = workdir
+        self.running: list[SitlProcess] = []
+
+    def start(
+        self,
+        model: Model,
+        *,
+        instance: int | None = None,
+        speedup: float = 10.0,
+        home: GeoPoint = DEFAULT_HOME,
+        params: dict[str, float] | None = None,
+    ) -> SitlProcess:
+        """A fresh instance (own working directory, wiped eeprom) listening on its port.
+
+        ``instance=None`` takes the lowest instance number whose ports are free, so
+        tests can run next to another SITL on the machine.
+        """
+        if instance is None:
+            taken = {s.instance for s in self.running}
+            instance = next(n for n in range(1, 60) if n not in taken and instance_free(n))
+        sitl = SitlProcess(
+            model,
+            instance,
+            self.workdir / f"{model}{instance}",
+            speedup=speedup,
+            home=home,
+            params=params,
+            folder=self.folder,
+        )
+        self.running.append(sitl)
+        return sitl.start()
+
+    def stop_all(self) -> None:
+        for sitl in self.running:
+            sitl.stop()
+
+
+# ------------------------------------------------------------------ missions
+def sitl_mission(
+    name: str,
+    urls: Mapping[str, str],
+    workdir: Path,
+    *,
+    replans: int = 0,
+    change: Callable[[dict[str, Any]], None] | None = None,
+) -> Path:
+    """The shipped mission ``name`` with each performer (by vehicle) on its SITL url."""
+    data = yaml.safe_load((CONFIGS / name).read_text())
+    for key in ("domain", "problem"):
+        data[key] = str(CONFIGS / data[key])
+    for entry in data["performers"]:
+        entry.pop("double", None)
+        entry["url"] = urls[entry["vehicle"]]
+        entry["timeouts"] = SITL_TIMEOUTS
+        if isinstance(entry.get("locations"), str):
+            entry["locations"] = str(CONFIGS / entry["locations"])
+    data["replanning"] = {"max_replans": replans}
+    data["timeout"] = 600
+    if change is not None:
+        change(data)
+    path = workdir / name
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+def cli() -> list[str]:
+    """The ``plansys-bridge`` command of this environment."""
+    script = Path(sys.executable).with_name("plansys-bridge")
+    return [str(script)] if script.exists() else [sys.executable, "-m", "plansys_bridge"]
+
+
+def start_cli(mission: Path) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [*cli(), "run", str(mission), "--json"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        stdin=subprocess.DEVNULL,
+        text=True,
+    )
+
+
+def finish_cli(proc: subprocess.Popen[str], timeout: float = 300) -> dict[str, Any]:
+    """Wait for ``plansys-bridge run`` and return its JSON report (with stderr kept)."""
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.terminate()
+        out, err = proc.communicate(timeout=10)
+        raise AssertionError(
+            f"plansys-bridge run still running after {timeout:g} s:\n{err}"
+        ) from None
+    try:
+        report: dict[str, Any] = json.loads(out)
+    except json.JSONDecodeError:
+        raise AssertionError(f"exit {proc.returncode}, no JSON report:\n{out}\n{err}") from None
+    report["exit_code"] = proc.returncode
+    report["stderr"] = err
+    return report
+
+
+def run_cli(mission: Path, timeout: float = 300) -> dict[str, Any]:
+    return finish_cli(start_cli(mission), timeout)
+
+
+def describe(report: Mapping[str, Any]) -> str:
+    """The report's actions one per line, for assertion messages."""
+    lines = [f"{report.get('status')}: {report.get('message')}"]
+    for r in report.get("records", []):
+        lines.append(f"  {r['status']:<10} {r['action']} by {r['performer']}: {r['message']}")
+    lines.append(str(report.get("stderr", ""))[-2000:])
+    return "\n".join(lines)
+
+
+def assert_succeeded(report: Mapping[str, Any]) -> None:
+    """SUCCEEDED with every action succeeded: none failed or halted on the way."""
+    assert report["success"] and report["exit_code"] == 0, describe(report)
+    assert report["records"], describe(report)
+    assert all(r["status"] == "SUCCEEDED" for r in report["records"]), describe(report)
+    assert report["replans"] == 0, describe(report)
