@@ -12,7 +12,6 @@ from pddl_corpus import FIXTURES
 from plansys_bridge.cli import terminal_cmd
 from plansys_bridge.knowledge.domain_expert import DomainExpert
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
-from plansys_bridge.planning.plan import Plan, PlanStep
 from plansys_bridge.terminal import HELP, Terminal
 
 EXAMPLES = FIXTURES / "ros2_planning_system_examples"
@@ -196,48 +195,6 @@ def test_run_without_executor_says_so() -> None:
     assert "no hub is connected" in term.execute_line("check actors")
 
 
-def test_run_commands_reach_the_executor(tmp_path: Path) -> None:
-    executed: list[Plan] = []
-
-    def executor(plan: Plan) -> str:
-        executed.append(plan)
-        return f"executed {len(plan)} actions"
-
-    term = make_terminal(
-        [SIMPLE_DOMAIN], executor_factory=executor, actors=lambda: ["move_node", "charge_node"]
-    )
-    term.source(EXAMPLES / "plansys2_simple_example/launch/commands", skip={"run"})
-    assert term.execute_line("run action (move leia entrance dinning)") == "executed 1 actions"
-    assert executed[-1] == Plan((PlanStep(0.0, "move", ("leia", "entrance", "dinning"), 5.0),))
-    assert term.execute_line("run (askcharge leia entrance chargingroom)") == "executed 1 actions"
-    assert executed[-1].steps[0].action == "askcharge"
-    out = term.execute_line("run action (move leia entrance nowhere)")
-    assert out.startswith("error: ") and "nowhere" in out
-    plan_file = tmp_path / "plan.txt"
-    plan_file.write_text(
-        "0.000: (move leia entrance dinning)  [5.000]\n"
-        "5.001: (move leia dinning kitchen)  [5.000]\n"
-    )
-    assert term.execute_line(f"run plan-file {plan_file}") == "executed 2 actions"
-    assert [s.action for s in executed[-1]] == ["move", "move"]
-    assert term.execute_line("check actors") == "Actors: 2\n\tcharge_node\n\tmove_node"
-
-
-def test_plan_and_run_with_the_planner() -> None:
-    executed: list[Plan] = []
-    term = make_terminal([SIMPLE_DOMAIN], executor_factory=lambda plan: executed.append(plan))
-    assert term.execute_line("get plan").startswith("error: no goal is set")
-    term.source(EXAMPLES / "plansys2_simple_example/launch/commands", skip={"run"})
-    plan_text = term.execute_line("get plan")
-    lines = plan_text.splitlines()
-    assert lines[0].startswith("0.000: (askcharge leia entrance chargingroom)")
-    assert lines[-1].split(": ", 1)[1].startswith("(move leia bedroom bathroom)")
-    assert term.execute_line("run num_actions 2") == ""
-    assert [s.action for s in executed[-1]] == ["askcharge", "charge"]
-    assert term.execute_line("run") == ""
-    assert len(executed[-1]) == len(lines)
-
-
 def test_source_nested_relative_and_recursive(tmp_path: Path) -> None:
     (tmp_path / "inner").write_text(
         "set instance kitchen room\nset predicate (robot_at leia kitchen)\n"
@@ -295,46 +252,6 @@ def test_cli_sources_then_reads_stdin() -> None:
     args = _cli_args(str(domain), "--problem", str(problem))
     assert terminal_cmd.run(args, stdin=io.StringIO("get problem predicates\n"), stdout=out) == 0
     assert "(robot_at leia kitchen)" in out.getvalue()
-
-
-MISSION = """
-name: terminal_mission
-domain: {domain}
-knowledge:
-  instances: {{leia: robot, entrance: room, dinning: room, kitchen: room, chargingroom: room}}
-  predicates:
-    - (connected entrance dinning)
-    - (connected dinning kitchen)
-    - (connected kitchen chargingroom)
-    - (connected chargingroom kitchen)
-    - (charging_point_at chargingroom)
-    - (battery_low leia)
-    - (robot_at leia entrance)
-goal: (and (robot_at leia kitchen))
-performers:
-  - kind: simulated
-    name: leia_base
-    actions: {{move: [leia], askcharge: [leia], charge: [leia]}}
-    durations: {{move: 5, askcharge: 5, charge: 5}}
-clock: {{kind: virtual}}
-"""
-
-
-def test_cli_mission_runs_plans_with_its_performers(tmp_path: Path) -> None:
-    """``--mission``: the real executor and simulated performers on the virtual clock."""
-    mission = tmp_path / "mission.yaml"
-    mission.write_text(MISSION.format(domain=SIMPLE_DOMAIN))
-    out = io.StringIO()
-    commands = "check actors\nrun\nget problem predicates\nrun action (move leia kitchen dinning)\n"
-    code = terminal_cmd.run(_cli_args("--mission", str(mission)), io.StringIO(commands), out)
-    text = out.getvalue()
-    assert code == 1, text  # the last action has no (connected kitchen dinning)
-    assert "Actors: 1\n\tleia_base" in text
-    assert "succeeded\n  SUCCEEDED (askcharge leia entrance chargingroom)" in text
-    assert "(robot_at leia kitchen)" in text and "(battery_full leia)" in text
-    last = text.split("(robot_at leia kitchen)\n")[-1]
-    assert last.startswith("error: execution rejected: ")
-    assert "(move leia kitchen dinning)" in last and "(connected kitchen dinning)" in last
 
 
 def test_cli_needs_domain_or_mission(tmp_path: Path) -> None:

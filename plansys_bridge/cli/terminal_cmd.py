@@ -4,8 +4,9 @@ PlanSys2's terminal. Loads the (merged) domain and optionally a problem, runs th
 commands of ``--source`` files, then reads commands from stdin until ``quit`` or
 end of input. With ``--mission M.yaml`` the domain, the initial knowledge and the
 performers come from a mission file, and ``run`` executes plans with those
-performers (each ``run`` starts them, executes, and stops them; the mission's
-timed events are not replayed). Without a mission the terminal plans but does not run.
+performers (each ``run`` starts them, executes with live progress, and stops them;
+the mission's timed events are not replayed), and ``check actors`` lists the
+performers from their heartbeats. Without a mission the terminal plans but does not run.
 With stdin not a terminal (a pipe, a file, CI) no prompt is printed, so
 ``plansys-bridge terminal d.pddl < commands`` gives clean output. Exit status: 0,
 or 1 when a command failed in a non-interactive session, 2 for bad input files.
@@ -22,9 +23,7 @@ from plansys_bridge.cli.options import check_positive
 from plansys_bridge.textfile import TextFileError, read_text
 
 if TYPE_CHECKING:
-    from plansys_bridge.knowledge.problem_expert import ProblemExpert
-    from plansys_bridge.mission_config import MissionConfig
-    from plansys_bridge.planning.plan import Plan
+    from plansys_bridge.terminal.mission_runner import MissionRunner
 
 EXIT_OK = 0
 EXIT_COMMAND_FAILED = 1
@@ -75,10 +74,19 @@ class _ErrorCounter:
         self.stream.flush()
 
 
+def _line_writer(out: _ErrorCounter) -> Callable[[str], None]:
+    def write(line: str) -> None:
+        out.write(line + "\n")
+        out.flush()
+
+    return write
+
+
 def run(args: argparse.Namespace, stdin: TextIO | None = None, stdout: TextIO | None = None) -> int:
     from plansys_bridge.knowledge.domain_expert import DomainExpert
     from plansys_bridge.knowledge.problem_expert import ProblemExpert
     from plansys_bridge.terminal import Terminal
+    from plansys_bridge.terminal.mission_runner import MissionRunner
 
     check_positive(args.timeout, "--timeout")
     inp = stdin if stdin is not None else sys.stdin
@@ -92,8 +100,7 @@ def run(args: argparse.Namespace, stdin: TextIO | None = None, stdout: TextIO | 
 
         return Planner(solvers=args.solver, timeout=args.timeout)
 
-    executor: Callable[[Plan], object] | None = None
-    actors: Callable[[], list[str]] | None = None
+    runner: MissionRunner | None = None
     if args.mission:
         from plansys_bridge.mission import build_knowledge
         from plansys_bridge.mission_config import load_mission
@@ -103,9 +110,7 @@ def run(args: argparse.Namespace, stdin: TextIO | None = None, stdout: TextIO | 
             mission, DomainExpert.from_files(list(mission.domain_paths)).domain
         )
         domain_expert = problem_expert.domain_expert
-        executor = mission_executor(mission, problem_expert, planner)
-        names = [p.name for p in mission.performers]
-        actors = lambda: names  # noqa: E731
+        runner = MissionRunner(mission, problem_expert, planner, out=_line_writer(out))
     else:
         domain_expert = DomainExpert.from_files(args.domains)
         problem_expert = ProblemExpert(domain_expert)
@@ -121,10 +126,10 @@ def run(args: argparse.Namespace, stdin: TextIO | None = None, stdout: TextIO | 
         domain_expert,
         problem_expert,
         planner_factory=planner,
-        executor_factory=executor,
+        runner=runner,
         out=out,  # type: ignore[arg-type]
-        actors=actors,
     )
+    terminal.stream_source = True
     for file in args.source or ():
         try:
             result = terminal.source(file)
@@ -137,33 +142,3 @@ def run(args: argparse.Namespace, stdin: TextIO | None = None, stdout: TextIO | 
         terminal.repl(inp)
     interactive = inp.isatty()
     return EXIT_COMMAND_FAILED if out.errors and not interactive else EXIT_OK
-
-
-def mission_executor(
-    mission: MissionConfig, knowledge: ProblemExpert, planner: Callable[[], Any]
-) -> Callable[[Plan], str]:
-    """An executor factory running plans with the mission's performers and clock."""
-    from plansys_bridge.clock import run as run_on_clock
-    from plansys_bridge.execution.executor import Executor
-    from plansys_bridge.mission import MissionSession, make_clock
-
-    quiet = mission.model_copy(update={"events": []})
-
-    def execute(plan: Plan) -> str:
-        clock = make_clock(quiet)
-
-        async def go() -> Any:
-            async with MissionSession(quiet, knowledge.domain, knowledge, clock) as session:
-                executor = Executor(
-                    session.hub, knowledge.domain, knowledge, planner(), quiet.executor_options()
-                )
-                return await executor.execute(plan, goal=knowledge.get_goal())
-
-        result = run_on_clock(go(), clock)
-        headline = f"{result.status}: {result.message}".rstrip(": ")
-        # a failed execution reads as an error, so scripts see it in the exit status
-        lines = [headline if result.success else f"error: execution {headline}"]
-        lines += [f"  {a.status.name:<9} {a.text}" for a in result.actions]
-        return "\n".join(lines)
-
-    return execute

@@ -3,39 +3,53 @@
 It speaks PlanSys2's ``plansys2_terminal`` language, so the ``commands`` files
 shipped with PlanSys2's examples can be ``source``d as they are::
 
-    get model types|predicates|functions|actions|predicate X|function X|action X
+    get model types|predicates|functions|actions|deriveds
+    get model predicate X|function X|action X|derived X
     get problem instances|predicates|functions|goal      get problem   get domain
     get plan
     set instance NAME TYPE        set predicate (p a b)    set function (= (f a) 3)
     set goal (and ...)
     remove instance NAME | predicate (p a b) | function (f a) | goal
     run | run num_actions N | run action (a x y) | run (a x y) | run plan-file FILE
-    check actors     source FILE     help     quit
+    check actors     source FILE [0|1]     help|? [COMMAND]     quit
+
+As in PlanSys2, only a bare ``run`` aims at the goal (and replans on failure);
+``run action``, ``run num_actions`` and ``run plan-file`` execute exactly the
+actions asked for and stop.
 
 Why the shape: :meth:`Terminal.execute_line` takes one line and returns the text to
 show, and never raises for bad input (an error line is returned instead), so the
 REPL, ``source`` and tests all share it. Planning and execution are reached through
-factories given by the caller (the CLI wires the embedded planner and a mission
-executor); when one is missing the terminal says so instead of failing.
+a planner factory and a :class:`~plansys_bridge.terminal.runner.Runner` given by the
+caller (the CLI wires the embedded planner and a mission); when one is missing the
+terminal says so instead of failing.
 """
 
 from __future__ import annotations
 
-import contextlib
 import shlex
 import sys
-from collections.abc import Callable, Collection, Iterable
+from collections.abc import Callable, Collection
 from pathlib import Path
 from typing import Any, Protocol, TextIO
 
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.knowledge.domain_expert import DomainExpert
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
-from plansys_bridge.pddl.model import Action, AnyAction, Domain, Problem, TypedName
+from plansys_bridge.pddl.model import Domain, Problem
 from plansys_bridge.planning.plan import Plan, PlanStep, format_plan, parse_action_text, parse_plan
+from plansys_bridge.terminal.describe import (
+    describe_action,
+    describe_derived,
+    listing,
+    params,
+    signature,
+)
+from plansys_bridge.terminal.help import help_text
+from plansys_bridge.terminal.runner import Runner
 from plansys_bridge.textfile import read_text
 
-__all__ = ["HELP", "Terminal", "TerminalError"]
+__all__ = ["Terminal", "TerminalError"]
 
 
 class TerminalError(PlansysBridgeError):
@@ -49,31 +63,6 @@ class _Planner(Protocol):
 PlannerFactory = Callable[[], _Planner]
 """Returns an object with ``solve(domain, problem) -> PlanResult``."""
 
-ExecutorFactory = Callable[[Plan], object]
-"""Executes a plan to its end; the returned result is shown with ``str()``."""
-
-HELP = """\
-Commands:
-  get model types | predicates | functions | actions
-  get model predicate NAME | function NAME | action NAME
-  get problem instances | predicates | functions | goal
-  get problem                   the knowledge as a PDDL problem
-  get domain                    the (merged) domain as PDDL
-  get plan                      plan from the current knowledge to the goal
-  set instance NAME TYPE
-  set predicate (p a b)
-  set function (= (f a b) 3)
-  set goal (and (p a b) ...)
-  remove instance NAME | predicate (p a b) | function (f a b) | goal
-  run                           plan and execute
-  run num_actions N             plan and execute the first N actions
-  run action (a x y)            execute one action (also: run (a x y))
-  run plan-file FILE            execute a plan file
-  check actors                  the action performers that are alive
-  source FILE                   run the commands in FILE
-  help                          this text
-  quit                          leave (also: exit, Ctrl-D)"""
-
 
 class Terminal:
     """Executes terminal commands against a problem expert (see module docs)."""
@@ -83,22 +72,24 @@ class Terminal:
         domain_expert: DomainExpert,
         problem_expert: ProblemExpert,
         planner_factory: PlannerFactory | None = None,
-        executor_factory: ExecutorFactory | None = None,
+        runner: Runner | None = None,
         out: TextIO | None = None,
         *,
-        actors: Callable[[], Iterable[str]] | None = None,
         base_dir: Path | None = None,
         problem_name: str = "problem",
     ) -> None:
         self.domain_expert = domain_expert
         self.problem_expert = problem_expert
         self.planner_factory = planner_factory
-        self.executor_factory = executor_factory
-        self.actors = actors
+        self.runner = runner
         self.out = out if out is not None else sys.stdout
         self.base_dir = base_dir if base_dir is not None else Path.cwd()
         self.problem_name = problem_name
         self.finished = False
+        self.stream_source = False
+        """True: ``source`` writes each command's output as it comes (a ``run`` in
+        the file shows live progress, so the outputs before it must be out first)
+        and returns only what is left; False: it returns all of it."""
         self._planner: _Planner | None = None
         self._sourcing: list[Path] = []
 
@@ -119,46 +110,17 @@ class Terminal:
             return f"internal error: {type(exc).__name__}: {exc}"
 
     def repl(self, inp: TextIO | None = None, prompt: str | None = None) -> int:
-        """Read commands until ``quit`` or end of input; returns an exit code.
+        """Read commands until ``quit`` or end of input (see :mod:`.repl`)."""
+        from plansys_bridge.terminal.repl import run_repl
 
-        The prompt is shown only when the input is a terminal (so piped command files
-        produce clean output); on a terminal, line editing and history are on and
-        Ctrl-C abandons the line being typed instead of ending the session.
-        """
-        source = inp if inp is not None else sys.stdin
-        interactive = source is sys.stdin and source.isatty()
-        if prompt is None:
-            prompt = "> " if source.isatty() else ""
-        if interactive:
-            with contextlib.suppress(ImportError):
-                import readline  # noqa: F401  (enables editing and history for input())
-        while not self.finished:
-            if interactive:
-                try:
-                    line = input(prompt)
-                except EOFError:
-                    break
-                except KeyboardInterrupt:
-                    self.out.write("\n")
-                    continue
-            else:
-                if prompt:
-                    self.out.write(prompt)
-                    self.out.flush()
-                line = source.readline()
-                if not line:
-                    break
-            result = self.execute_line(line)
-            if result:
-                self.out.write(result + "\n")
-                self.out.flush()
-        return 0
+        return run_repl(self, inp, prompt)
 
-    def source(self, path: str | Path, skip: Collection[str] = ()) -> str:
+    def source(self, path: str | Path, skip: Collection[str] = (), echo: bool = False) -> str:
         """Run every line of a commands file; returns the collected output.
 
         Lines whose command word is in ``skip`` (``{"run"}`` to only build the
-        knowledge) are passed over.
+        knowledge) are passed over; ``echo`` shows each command before its output
+        (PlanSys2's ``source FILE 1``).
         """
         file = self._resolve(path)
         if file in self._sourcing:
@@ -173,14 +135,24 @@ class Terminal:
                 words = line.split(None, 1)
                 if words and words[0].lower() in skip:
                     continue
+                if echo and line.strip():
+                    outputs.append(f"> {line.strip()}")
                 result = self.execute_line(line)
                 if result.startswith(("error:", "internal error:")):
                     result = f"{file}:{number}: {result}"
                 if result:
                     outputs.append(result)
+                if self.stream_source:
+                    self._write(outputs)
         finally:
             self._sourcing.pop()
         return "\n".join(outputs)
+
+    def _write(self, outputs: list[str]) -> None:
+        for text in outputs:
+            self.out.write(text + "\n")
+        self.out.flush()
+        outputs.clear()
 
     # ================================================================ dispatch
 
@@ -201,16 +173,28 @@ class Terminal:
                 raise TerminalError("usage: check actors")
             return self._check_actors()
         if command == "source":
-            if not rest:
-                raise TerminalError("usage: source FILE")
-            return self.source(_unquote(rest))
-        if command == "help":
-            return HELP
+            return self._source_command(rest)
+        if command in ("help", "?"):
+            words = rest.split()
+            found = help_text(words[0] if words else None)
+            if found is None or len(words) > 1:
+                raise TerminalError(f"no command {rest!r} (try: help)")
+            return found
         if command in ("quit", "exit"):
             self.finished = True
             return ""
         shown = head if len(head) <= 40 else head[:40] + "..."  # binary fed to stdin
         raise TerminalError(f"unknown command {shown!r} (try: help)")
+
+    def _source_command(self, rest: str) -> str:
+        usage = "usage: source FILE [0|1]"
+        try:
+            words = shlex.split(rest)
+        except ValueError:
+            words = rest.split()
+        if not words or len(words) > 2 or (len(words) == 2 and words[1] not in ("0", "1")):
+            raise TerminalError(usage)
+        return self.source(words[0], echo=len(words) == 2 and words[1] == "1")
 
     # ---------------------------------------------------------------- get
 
@@ -229,45 +213,57 @@ class Terminal:
             result = self._solve()
             return format_plan(result.plan).rstrip("\n") or "(empty plan: the goal already holds)"
         raise TerminalError(
-            "usage: get model types|predicates|functions|actions|predicate X|function X|"
-            "action X, get problem [instances|predicates|functions|goal], get domain, get plan"
+            "usage: get model types|predicates|functions|actions|deriveds|predicate X|function X|"
+            "action X|derived X, get problem [instances|predicates|functions|goal], get domain,"
+            " get plan"
         )
 
     def _get_model(self, what: str, names: list[str]) -> str:
         de = self.domain_expert
         if what == "types" and not names:
             types = de.get_types()
-            return _listing("Types", types)
+            return listing("Types", types)
         if what == "predicates" and not names:
-            return _listing(
-                "Predicates", [_signature(p.name, p.parameters) for p in de.get_predicates()]
+            return listing(
+                "Predicates", [signature(p.name, p.parameters) for p in de.get_predicates()]
             )
         if what == "functions" and not names:
-            return _listing(
-                "Functions", [_signature(f.name, f.parameters) for f in de.get_functions()]
+            return listing(
+                "Functions", [signature(f.name, f.parameters) for f in de.get_functions()]
             )
+        if what == "deriveds" and not names:
+            heads = {r.head.name: r.head for r in de.get_derived()}
+            return listing(
+                "Derived predicates", [signature(h.name, h.parameters) for h in heads.values()]
+            )
+        if what == "derived" and len(names) == 1:
+            rules = de.get_derived(names[0])
+            if not rules:
+                raise TerminalError(f"no derived predicate {names[0]!r}")
+            return describe_derived(rules)
         if what == "actions" and not names:
             items = [f"{a.name} (action)" for a in de.get_actions()]
             items += [f"{a.name} (durative action)" for a in de.get_durative_actions()]
-            return _listing("Actions", items)
+            return listing("Actions", items)
         if what == "predicate" and len(names) == 1:
             pred = de.get_predicate(names[0])
             if pred is None:
                 raise TerminalError(f"unknown predicate {names[0]!r}")
             derived = " (derived)" if de.is_derived(pred.name) else ""
-            return _listing(f"Predicate {pred.name}{derived} parameters", _params(pred.parameters))
+            return listing(f"Predicate {pred.name}{derived} parameters", params(pred.parameters))
         if what == "function" and len(names) == 1:
             func = de.get_function(names[0])
             if func is None:
                 raise TerminalError(f"unknown function {names[0]!r}")
-            return _listing(f"Function {func.name} parameters", _params(func.parameters))
+            return listing(f"Function {func.name} parameters", params(func.parameters))
         if what == "action" and len(names) == 1:
             action = de.get_action(names[0])
             if action is None:
                 raise TerminalError(f"unknown action {names[0]!r}")
-            return _describe_action(action)
+            return describe_action(action)
         raise TerminalError(
-            "usage: get model types|predicates|functions|actions|predicate X|function X|action X"
+            "usage: get model types|predicates|functions|actions|deriveds"
+            "|predicate X|function X|action X|derived X"
         )
 
     def _get_problem(self, what: str) -> str:
@@ -275,11 +271,11 @@ class Terminal:
 
         pe = self.problem_expert
         if what == "instances":
-            return _listing("Instances", [f"{n}\t{t}" for n, t in pe.get_instances().items()])
+            return listing("Instances", [f"{n}\t{t}" for n, t in pe.get_instances().items()])
         if what == "predicates":
-            return _listing("Predicates", [str(a) for a in pe.get_predicates()], indent="")
+            return listing("Predicates", [str(a) for a in pe.get_predicates()], indent="")
         if what == "functions":
-            return _listing(
+            return listing(
                 "Functions", [write_fluent_value(f) for f in pe.get_functions()], indent=""
             )
         if what == "goal":
@@ -372,47 +368,57 @@ class Terminal:
             raise TerminalError(f"no plan found ({status}): {result.message}".rstrip(": "))
         return result
 
-    def _execute(self, plan: Plan) -> str:
-        assert self.executor_factory is not None
-        result = self.executor_factory(plan)
-        return str(result) if result is not None else ""
-
     def _run(self, rest: str) -> str:
-        words = rest.split()
-        if self.executor_factory is None:
+        runner = self.runner
+        if runner is None:
             raise TerminalError(
                 "no executor is configured: this terminal can plan (get plan) but not run; "
                 "start it with a mission to execute"
             )
+        words = rest.split()
         if not words:
-            return self._execute(self._solve().plan)
+            return runner.execute(self._solve().plan, to_goal=True)
         kind = words[0].lower()
         if kind == "num_actions":
             if len(words) != 2 or not words[1].isdigit():
                 raise TerminalError("usage: run num_actions N")
             count = int(words[1])
-            plan = Plan(self._solve().plan.sorted().steps[:count])
-            return self._execute(plan)
+            steps = self._solve().plan.sorted().steps
+            if not 0 < count <= len(steps):
+                raise TerminalError(f"cannot execute {count} actions: the plan has {len(steps)}")
+            return runner.execute(Plan(steps[:count]), to_goal=False)
         if kind == "plan-file":
             if len(words) < 2:
                 raise TerminalError("usage: run plan-file FILE")
             file = self._resolve(_unquote(rest.split(None, 1)[1]))
-            return self._execute(parse_plan(read_text(file, "plan file"), str(file)))
+            plan = parse_plan(read_text(file, "plan file"), str(file))
+            return runner.execute(plan, to_goal=False)
         action_text = rest.split(None, 1)[1] if kind == "action" and len(words) > 1 else rest
         if not action_text.startswith("("):
             raise TerminalError(
                 "usage: run | run num_actions N | run action (a x y) | run plan-file F"
             )
+        return runner.execute(Plan((self._ground_step(action_text),)), to_goal=False)
+
+    def _ground_step(self, action_text: str) -> PlanStep:
+        """The one-action plan for ``run action``: the action must exist, its objects
+        too with the right types (the executor checks its requirements on start)."""
         name, args = parse_action_text(action_text)
         ground = self.domain_expert.evaluator.ground_action(name, args, self.problem_expert.state())
         duration = ground.duration if ground.duration is not None else 1.0
-        return self._execute(Plan((PlanStep(0.0, name, args, duration),)))
+        return PlanStep(0.0, ground.name, ground.args, duration)
 
     def _check_actors(self) -> str:
-        if self.actors is None:
+        if self.runner is None:
             return "no hub is connected: no action performers are known"
-        names = sorted(self.actors())
-        return _listing("Actors", names)
+        actors = self.runner.actors()
+        return listing(
+            "Actors",
+            [
+                f"[{a.name}] {', '.join(a.actions)}\t{a.state}\tlast seen {a.seen_ago:.1f} s ago"
+                for a in sorted(actors, key=lambda a: a.name)
+            ],
+        )
 
     # ---------------------------------------------------------------- helpers
 
@@ -439,43 +445,3 @@ def _atom_text(arg: str, usage: str) -> str:
     if not text:
         raise TerminalError(f"usage: {usage}")
     return text if text.startswith("(") else f"({text})"
-
-
-def _listing(title: str, items: list[str], indent: str = "\t") -> str:
-    return "\n".join([f"{title}: {len(items)}", *(indent + i for i in items)])
-
-
-def _params(params: tuple[TypedName, ...]) -> list[str]:
-    return [f"{p.name} - {_types(p.types)}" for p in params]
-
-
-def _types(types: tuple[str, ...]) -> str:
-    return types[0] if len(types) == 1 else "(either " + " ".join(types) + ")"
-
-
-def _signature(name: str, params: tuple[TypedName, ...]) -> str:
-    return "(" + " ".join([name, *_params(params)]) + ")"
-
-
-def _describe_action(action: AnyAction) -> str:
-    from plansys_bridge.pddl.writer import write_condition, write_effect, write_num_expr
-
-    lines = [
-        f"Type: {'action' if isinstance(action, Action) else 'durative-action'}",
-        f"Name: {action.name}",
-        _listing("Parameters", _params(action.parameters)),
-    ]
-    if isinstance(action, Action):
-        lines.append(f"Precondition: {write_condition(action.precondition)}")
-        lines.append(f"Effect: {write_effect(action.effect)}")
-    else:
-        for constraint in action.duration:
-            lines.append(
-                f"Duration: ({constraint.op} ?duration {write_num_expr(constraint.value)})"
-            )
-        lines.append(f"At start requirements: {write_condition(action.at_start)}")
-        lines.append(f"Over all requirements: {write_condition(action.over_all)}")
-        lines.append(f"At end requirements: {write_condition(action.at_end)}")
-        lines.append(f"At start effect: {write_effect(action.start_effect)}")
-        lines.append(f"At end effect: {write_effect(action.end_effect)}")
-    return "\n".join(lines)
