@@ -17,9 +17,12 @@ from typing import Any
 from plansys_bridge.performers.base import ActionGoal, ActionPerformer
 
 SHARED = Path(__file__).resolve().parents[2] / "shared"
-"""shared/ beside the repository: PlanSys2's PDDL corpus and real bags."""
+"""shared/ beside the repository: the larger real bags."""
 
-FIXTURES = Path(os.environ.get("PLANSYS_BRIDGE_FIXTURES") or SHARED / "fixtures" / "plansys2")
+FIXTURES = Path(
+    os.environ.get("PLANSYS_BRIDGE_FIXTURES")
+    or Path(__file__).resolve().parents[1] / "tests" / "fixtures" / "plansys2"
+)
 """PlanSys2's PDDL corpus (``$PLANSYS_BRIDGE_FIXTURES`` overrides, as in the tests)."""
 
 BAGS = SHARED / "bags"

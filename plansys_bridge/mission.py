@@ -481,4 +481,8 @@ async def _heard_the_end(watch: MissionWatch, result: ExecutionResult, wait: flo
 
 
 def default_missions_dir() -> Path:
+    """The example missions: shipped in the package (a wheel), else the checkout's configs/."""
+    packaged = Path(__file__).resolve().parent / "data" / "configs"
+    if packaged.is_dir():
+        return packaged
     return Path(__file__).resolve().parents[1] / "configs"

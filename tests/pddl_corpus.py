@@ -2,9 +2,9 @@
 
 Shared by every test folder (tests/ is on the import path through its conftest).
 
-The corpus (../shared/fixtures/plansys2, or $PLANSYS_BRIDGE_FIXTURES) keeps the
+The corpus (tests/fixtures/plansys2, or $PLANSYS_BRIDGE_FIXTURES) keeps the
 repository-relative paths of PlanSys2's repositories. The broken files are the
-ones its README lists.
+ones tests/fixtures/README.md lists.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from plansys_bridge.pddl.parser import parse_domain
 
 FIXTURES = Path(
     os.environ.get("PLANSYS_BRIDGE_FIXTURES")
-    or Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "plansys2"
+    or Path(__file__).resolve().parent / "fixtures" / "plansys2"
 )
 """Where the corpus should be (tests that need particular files read them from here)."""
 

@@ -1,19 +1,11 @@
-"""Fixtures for the ROS-bag adapter tests: the shared real bags and the demo bags."""
+"""Fixtures for the ROS-bag adapter tests: the demo bags and the leak check."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import pytest
-from rosbag_testdata import DEMO_BAGS, SHARED_BAGS
-
-
-@pytest.fixture
-def shared_bags() -> Path:
-    """../shared/bags beside the repository (real recordings); skip when absent."""
-    if not (SHARED_BAGS / "rl_test1.bag").is_file():
-        pytest.skip(f"real bags not found at {SHARED_BAGS.resolve()}")
-    return SHARED_BAGS.resolve()
+from rosbag_testdata import DEMO_BAGS
 
 
 @pytest.fixture

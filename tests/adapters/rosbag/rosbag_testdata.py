@@ -4,9 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 REPO = Path(__file__).resolve().parents[3]
-SHARED_BAGS = REPO / ".." / "shared" / "bags"
-"""Real recordings (../shared/bags beside the repository; see its SOURCES.md)."""
+REAL_BAG_DIRS = (REPO / "tests" / "fixtures" / "bags", REPO / ".." / "shared" / "bags")
+"""Real recordings: the one kept in the repository (see tests/fixtures/bags/SOURCES.md),
+then a sibling shared/bags folder holding the larger ones, when there is one."""
 DEMO_BAGS = REPO / "bags"
 """The bags the project generates for its demos."""
 
@@ -15,3 +18,11 @@ ARDRONE = ("rl_test3_groovy.bag", "/ardrone/odometry/raw")
 NAV2_ODOM = ("evo_nav2_turtlebot.mcap", "/odom")
 NAV2_AMCL = ("evo_nav2_turtlebot.mcap", "/amcl_pose")
 AMR_LOCATION = ("amr_rosbag_demo.bag", "/location")
+
+
+def real_bag(name: str) -> Path:
+    """The recorded bag NAME, or skip the test naming the missing file."""
+    for folder in REAL_BAG_DIRS:
+        if (folder / name).is_file():
+            return (folder / name).resolve()
+    pytest.skip(f"real bag {name} not found (looked in tests/fixtures/bags and ../shared/bags)")

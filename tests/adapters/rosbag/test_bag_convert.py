@@ -9,15 +9,15 @@ import pytest
 from plansys_bridge_adapters.rosbag.convert import convert_to_ros2, main
 from plansys_bridge_adapters.rosbag.errors import BagError, BagTopicError, BagTypeError
 from plansys_bridge_adapters.rosbag.reader import BagReader, read_poses
-from rosbag_testdata import AMR_LOCATION, HUSKY
+from rosbag_testdata import AMR_LOCATION, HUSKY, real_bag
 from rosbags.highlevel import AnyReader
 from rosbags.rosbag1 import Writer as Writer1
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 
-def test_husky_bag_becomes_a_ros2_mcap_bag(shared_bags: Path, tmp_path: Path) -> None:
+def test_husky_bag_becomes_a_ros2_mcap_bag(tmp_path: Path) -> None:
     dst = tmp_path / "husky"
-    report = convert_to_ros2(shared_bags / HUSKY[0], dst, [HUSKY[1], "/fix"])
+    report = convert_to_ros2(real_bag(HUSKY[0]), dst, [HUSKY[1], "/fix"])
     assert report.counts == {HUSKY[1]: 3952, "/fix": 989}
     assert [p.suffix for p in dst.iterdir()] and (dst / "husky.mcap").is_file()
     with BagReader(dst) as bag:
@@ -27,7 +27,7 @@ def test_husky_bag_becomes_a_ros2_mcap_bag(shared_bags: Path, tmp_path: Path) ->
             "/fix": "sensor_msgs/msg/NavSatFix",
         }
     # the converted poses are the ones read (and converted) from the ROS 1 bag directly
-    assert list(read_poses(dst, HUSKY[1])) == list(read_poses(shared_bags / HUSKY[0], HUSKY[1]))
+    assert list(read_poses(dst, HUSKY[1])) == list(read_poses(real_bag(HUSKY[0]), HUSKY[1]))
     with AnyReader([dst]) as reader:
         conn = next(c for c in reader.connections if c.topic == "/fix")
         _, _, raw = next(reader.messages([conn]))
@@ -35,8 +35,8 @@ def test_husky_bag_becomes_a_ros2_mcap_bag(shared_bags: Path, tmp_path: Path) ->
     assert -90 <= fix.latitude <= 90 and not hasattr(fix.header, "seq")
 
 
-def test_every_topic_by_default(shared_bags: Path, tmp_path: Path) -> None:
-    report = convert_to_ros2(shared_bags / AMR_LOCATION[0], tmp_path / "amr")
+def test_every_topic_by_default(tmp_path: Path) -> None:
+    report = convert_to_ros2(real_bag(AMR_LOCATION[0]), tmp_path / "amr")
     assert report.counts[AMR_LOCATION[1]] == 5273
     assert set(report.counts) == {
         "/battery", "/battery_runtime", "/load_perc_available", "/local_plan", "/location",
@@ -79,18 +79,18 @@ def test_unconvertible_topic_fails_or_is_skipped(tmp_path: Path) -> None:
     assert "unknown to ROS 2 Humble" in report.skipped["/tank"]
 
 
-def test_errors_leave_no_destination(shared_bags: Path, tmp_path: Path) -> None:
+def test_errors_leave_no_destination(tmp_path: Path) -> None:
     with pytest.raises(BagTopicError):
-        convert_to_ros2(shared_bags / HUSKY[0], tmp_path / "out", ["/nope"])
+        convert_to_ros2(real_bag(HUSKY[0]), tmp_path / "out", ["/nope"])
     assert not (tmp_path / "out").exists()
-    data = (shared_bags / HUSKY[0]).read_bytes()
+    data = (real_bag(HUSKY[0])).read_bytes()
     (tmp_path / "cut.bag").write_bytes(data[: len(data) // 2])
     with pytest.raises(BagError, match="truncated or damaged"):
         convert_to_ros2(tmp_path / "cut.bag", tmp_path / "out")
     assert not (tmp_path / "out").exists()
     (tmp_path / "out").mkdir()
     with pytest.raises(BagError, match="exists already"):
-        convert_to_ros2(shared_bags / HUSKY[0], tmp_path / "out", [HUSKY[1]])
+        convert_to_ros2(real_bag(HUSKY[0]), tmp_path / "out", [HUSKY[1]])
 
 
 def test_command_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -15,7 +15,7 @@ from plansys_bridge_adapters.rosbag.errors import BagCorruptError, BagTopicError
 from plansys_bridge_adapters.rosbag.performer import BagNavigationPerformer
 from plansys_bridge_adapters.rosbag.reader import POSE_STAMPED, BagReader, PoseSample
 from plansys_bridge_adapters.rosbag.route import Segment
-from rosbag_testdata import ARDRONE, HUSKY, NAV2_AMCL, NAV2_ODOM, REPO
+from rosbag_testdata import ARDRONE, HUSKY, NAV2_AMCL, NAV2_ODOM, REPO, real_bag
 from rosbags.highlevel import AnyReader
 
 from plansys_bridge.clock import run
@@ -117,7 +117,6 @@ def test_ros1_bag_of_the_same_drive_gives_the_same_path(virtual_hub: Hub, demo_b
 )
 def test_real_bag_segments_replay_through_the_auction(
     virtual_hub: Hub,
-    shared_bags: Path,
     tmp_path: Path,
     source: tuple[str, str],
     start: float,
@@ -130,7 +129,7 @@ def test_real_bag_segments_replay_through_the_auction(
         recorder = MissionRecorder(virtual_hub, tmp_path / "run").start()
         performer = _performer(
             virtual_hub,
-            shared_bags,
+            real_bag(name).parent,
             recorder,
             bag=name,
             topic=topic,
@@ -149,10 +148,8 @@ def test_real_bag_segments_replay_through_the_auction(
         assert profile.duration > 0.9 * (end - start) - 2.0
         assert feedback[-1][1] == pytest.approx(1.0)
         # the last replayed pose is the last pose of the window, read independently
-        with BagReader(shared_bags / name) as bag:
-            window = list(
-                Segment(bag=shared_bags / name, topic=topic, start=start, end=end).poses(bag)
-            )
+        with BagReader(real_bag(name)) as bag:
+            window = list(Segment(bag=real_bag(name), topic=topic, start=start, end=end).poses(bag))
         assert last is not None and last.bag_time_ns == window[-1].bag_time_ns
         assert (last.x, last.y, last.z) == (window[-1].x, window[-1].y, window[-1].z)
         # replayed messages reached the recorder as ROS 2 messages of the same type
@@ -228,8 +225,8 @@ def test_bag_broken_after_start_fails_the_action(
     run(main(), virtual_hub.clock)
 
 
-def test_truncated_bag_fails_at_start(virtual_hub: Hub, shared_bags: Path, tmp_path: Path) -> None:
-    data = (shared_bags / HUSKY[0]).read_bytes()
+def test_truncated_bag_fails_at_start(virtual_hub: Hub, tmp_path: Path) -> None:
+    data = (real_bag(HUSKY[0])).read_bytes()
     (tmp_path / HUSKY[0]).write_bytes(data[: len(data) // 3])
 
     async def main() -> None:

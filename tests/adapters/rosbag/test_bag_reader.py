@@ -25,7 +25,7 @@ from plansys_bridge_adapters.rosbag.reader import (
     ros2_typestore,
     yaw_from_quaternion,
 )
-from rosbag_testdata import AMR_LOCATION, ARDRONE, DEMO_BAGS, HUSKY, NAV2_AMCL, NAV2_ODOM
+from rosbag_testdata import AMR_LOCATION, ARDRONE, DEMO_BAGS, HUSKY, NAV2_AMCL, NAV2_ODOM, real_bag
 from rosbags.highlevel import AnyReader
 from rosbags.rosbag1 import Writer as Writer1
 from rosbags.rosbag2 import StoragePlugin, Writer
@@ -45,10 +45,10 @@ REAL = [
 
 @pytest.mark.parametrize(("source", "msgtype", "count", "ros1"), REAL)
 def test_reads_every_pose_of_real_bags(
-    shared_bags: Path, source: tuple[str, str], msgtype: str, count: int, ros1: bool
+    source: tuple[str, str], msgtype: str, count: int, ros1: bool
 ) -> None:
     name, topic = source
-    with BagReader(shared_bags / name) as bag:
+    with BagReader(real_bag(name)) as bag:
         assert bag.is_ros1 is ros1
         assert bag.topics[topic] == msgtype
         assert bag.message_count(topic) == count
@@ -67,10 +67,10 @@ def test_reads_every_pose_of_real_bags(
 @pytest.mark.parametrize(
     "source", [HUSKY, ARDRONE, AMR_LOCATION], ids=["husky", "ardrone", "amr-location"]
 )
-def test_ros1_messages_become_ros2_messages(shared_bags: Path, source: tuple[str, str]) -> None:
+def test_ros1_messages_become_ros2_messages(source: tuple[str, str]) -> None:
     """The CDR bytes decode with ROS 2 Humble types and keep every value but ``seq``."""
     name, topic = source
-    path = shared_bags / name
+    path = real_bag(name)
     with AnyReader([path]) as ros1:
         conn = next(c for c in ros1.connections if c.topic == topic)
         originals: list[Any] = []
@@ -99,17 +99,17 @@ def test_ros1_messages_become_ros2_messages(shared_bags: Path, source: tuple[str
         assert ros2_typestore().serialize_cdr(msg, sample.msgtype) == sample.cdr
 
 
-def test_husky_odometry_values(shared_bags: Path) -> None:
+def test_husky_odometry_values() -> None:
     """Spot values: the Husky starts 8.25 m along x in its odom frame and drives away."""
-    first = next(read_poses(shared_bags / HUSKY[0], HUSKY[1]))
+    first = next(read_poses(real_bag(HUSKY[0]), HUSKY[1]))
     assert first.frame_id == "odom"
     assert first.x == pytest.approx(8.2515628, abs=1e-6)
     assert first.y == pytest.approx(-0.3048932, abs=1e-6)
     assert first.stamp == pytest.approx(1432235498.027976, abs=1e-6)
 
 
-def test_time_window_selects_messages(shared_bags: Path) -> None:
-    with BagReader(shared_bags / NAV2_ODOM[0]) as bag:
+def test_time_window_selects_messages() -> None:
+    with BagReader(real_bag(NAV2_ODOM[0])) as bag:
         start = bag.start_ns + 10 * 10**9
         stop = bag.start_ns + 20 * 10**9
         window = list(bag.poses(NAV2_ODOM[1], start, stop))
@@ -118,8 +118,8 @@ def test_time_window_selects_messages(shared_bags: Path) -> None:
         assert len(window) < bag.message_count(NAV2_ODOM[1]) / 5
 
 
-def test_missing_topic_names_bag_and_topics(shared_bags: Path) -> None:
-    path = shared_bags / HUSKY[0]
+def test_missing_topic_names_bag_and_topics() -> None:
+    path = real_bag(HUSKY[0])
     with BagReader(path) as bag, pytest.raises(BagTopicError) as err:
         list(bag.poses("/odom"))
     text = str(err.value)
@@ -128,8 +128,8 @@ def test_missing_topic_names_bag_and_topics(shared_bags: Path) -> None:
     assert isinstance(err.value, AdapterError)
 
 
-def test_type_without_pose_is_refused(shared_bags: Path) -> None:
-    with BagReader(shared_bags / HUSKY[0]) as bag, pytest.raises(BagTypeError) as err:
+def test_type_without_pose_is_refused() -> None:
+    with BagReader(real_bag(HUSKY[0])) as bag, pytest.raises(BagTypeError) as err:
         next(bag.poses("/imu/data"))
     assert "sensor_msgs/msg/Imu" in str(err.value) and "/imu/data" in str(err.value)
 
@@ -161,9 +161,9 @@ def test_missing_file_and_unknown_format(tmp_path: Path) -> None:
 )
 @pytest.mark.parametrize("fraction", [0.2, 0.9])
 def test_truncated_copies_fail_clearly(
-    shared_bags: Path, tmp_path: Path, name: str, topic: str, fraction: float
+    tmp_path: Path, name: str, topic: str, fraction: float
 ) -> None:
-    data = (shared_bags / name).read_bytes()
+    data = (real_bag(name)).read_bytes()
     copy = tmp_path / name
     copy.write_bytes(data[: int(len(data) * fraction)])
     with pytest.raises(BagCorruptError) as err, BagReader(copy) as bag:
@@ -180,9 +180,9 @@ def test_truncated_copies_fail_clearly(
     ids=["husky-bz2-chunk", "amr-record-header", "nav2-zstd-chunk"],
 )
 def test_damaged_middle_fails_with_topic_and_last_good_time(
-    shared_bags: Path, tmp_path: Path, name: str, topic: str, fraction: float
+    tmp_path: Path, name: str, topic: str, fraction: float
 ) -> None:
-    data = bytearray((shared_bags / name).read_bytes())
+    data = bytearray((real_bag(name)).read_bytes())
     at = int(len(data) * fraction)
     data[at : at + 4000] = b"\xff" * 4000
     copy = tmp_path / name
@@ -197,11 +197,9 @@ def test_damaged_middle_fails_with_topic_and_last_good_time(
 
 
 @pytest.mark.parametrize("length", [2**64 - 1, 2**62], ids=["overflow", "memory"])
-def test_absurd_mcap_record_length_fails_clearly(
-    shared_bags: Path, tmp_path: Path, length: int
-) -> None:
+def test_absurd_mcap_record_length_fails_clearly(tmp_path: Path, length: int) -> None:
     """A damaged uint64 record length in the mcap summary is corruption, not a crash."""
-    data = bytearray((shared_bags / NAV2_ODOM[0]).read_bytes())
+    data = bytearray((real_bag(NAV2_ODOM[0])).read_bytes())
     (summary_start,) = struct.unpack_from("<Q", data, len(data) - 37 + 9)
     assert summary_start, "the test bag has a summary section"
     struct.pack_into("<Q", data, summary_start + 1, length)  # after the record's opcode

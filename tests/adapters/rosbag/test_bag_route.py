@@ -20,7 +20,7 @@ from plansys_bridge_adapters.rosbag.route import (
     distance,
     profile_segment,
 )
-from rosbag_testdata import HUSKY
+from rosbag_testdata import HUSKY, real_bag
 
 from plansys_bridge.errors import ConfigError
 
@@ -76,8 +76,8 @@ def test_progress_reaches_one_at_the_end_and_never_decreases(demo_bags: Path) ->
     assert values[len(values) // 2] == pytest.approx(0.5, abs=0.02)
 
 
-def test_real_husky_segment(shared_bags: Path) -> None:
-    seg = Segment(bag=shared_bags / HUSKY[0], topic=HUSKY[1], start=100.0, end=160.0)
+def test_real_husky_segment() -> None:
+    seg = Segment(bag=real_bag(HUSKY[0]), topic=HUSKY[1], start=100.0, end=160.0)
     profile = profile_segment(seg)
     assert 55.0 < profile.duration <= 60.0
     assert profile.count == pytest.approx(600, abs=5)  # 10 Hz odometry
