@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from plansys_bridge.clock import Clock, VirtualClock, WallClock, run
-from plansys_bridge.errors import ConfigError, PlansysBridgeError
+from plansys_bridge.errors import ConfigError, PddlError, PlansysBridgeError
 from plansys_bridge.execution.executor import Executor
 from plansys_bridge.execution.results import ExecutionResult, efficiency_text
 from plansys_bridge.hub.hub import Hub
@@ -31,10 +31,14 @@ from plansys_bridge.monitoring.watch import MissionWatch
 from plansys_bridge.pddl.model import Domain
 from plansys_bridge.pddl.parser import parse_domain_files
 from plansys_bridge.performers.base import ActionPerformer, PerformerContext
-from plansys_bridge.performers.registry import performers_from_config
+from plansys_bridge.performers.registry import (
+    performers_from_config,
+    start_performers,
+    unserved_actions,
+)
 from plansys_bridge.planning.plan import Plan
 from plansys_bridge.planning.planner import Planner
-from plansys_bridge.textfile import read_text
+from plansys_bridge.textfile import TextFileError, read_text
 
 __all__ = [
     "MissionReport",
@@ -102,6 +106,21 @@ def make_transport(mission: MissionConfig) -> Transport:
             ) from exc
         return DdsTransport(mission.transport.domain_id)
     return InProcessTransport()
+
+
+def load_domain(mission: MissionConfig) -> Domain:
+    """The mission's domain files, parsed and merged; a file that cannot be read is
+    an error naming the mission file and its ``domain`` entry."""
+    paths = mission.domain_paths
+    try:
+        return parse_domain_files(paths)
+    except PddlError as exc:
+        cause = exc.__cause__
+        if not isinstance(cause, TextFileError):
+            raise
+        i = next((i for i, p in enumerate(paths) if str(p) == cause.path), 0)
+        key = "domain" if len(paths) == 1 else f"domain[{i}]"
+        raise ConfigError(str(cause), key=key, file=mission.source) from exc
 
 
 def build_knowledge(mission: MissionConfig, domain: Domain) -> ProblemExpert:
@@ -279,8 +298,7 @@ class MissionSession:
             if self.local_performers:
                 with in_mission_file(self.mission):
                     self.performers = performers_from_config(entries, context)
-            for performer in self.performers:
-                await performer.start()
+            await start_performers(self.performers, self._say)
             if not self.local_performers:
                 await self._wait_for_remote_performers()
             self.hub.publish(Topics.KNOWLEDGE, self.knowledge.to_msg())
@@ -370,7 +388,7 @@ def run_mission(
     ``local_performers=False`` runs the executor only: the performers are served by
     ``plansys-bridge performers`` in other processes over the DDS transport.
     """
-    domain = parse_domain_files(mission.domain_paths)
+    domain = load_domain(mission)
     knowledge = build_knowledge(mission, domain)
     if knowledge.get_goal() is None:
         raise ConfigError(
@@ -433,6 +451,18 @@ async def _run(
         )
         for line in plan.to_text().splitlines():
             say(f"    {line}")
+        missing = unserved_actions(((s.action, s.arguments) for s in plan), session.performers)
+        if local_performers and missing:
+            return MissionReport(
+                mission.name,
+                False,
+                "no performer",
+                f"{mission.source}: no performer offers {', '.join(missing)} "
+                "(add it to a performer's actions, or check their specialised arguments)",
+                None,
+                planning_s,
+                session.events_applied,
+            )
         executor = Executor(session.hub, domain, knowledge, planner, mission.executor_options())
         watch = MissionWatch(clock.now, ProgressLines(say, elapsed)).attach(session.hub)
         execute = executor.execute(plan, goal=knowledge.get_goal())

@@ -174,6 +174,27 @@ def _key_path(loc: tuple[int | str, ...]) -> str:
     return out
 
 
+def _find_nul(value: Any, where: tuple[int | str, ...]) -> tuple[tuple[int | str, ...], str] | None:
+    """The first string (key or value) holding a NUL byte, and where it is.
+
+    File systems refuse such names with a bare ValueError wherever the path is
+    used (domain, locations, bags, DBC files), so the whole file is checked once."""
+    stack: list[tuple[Any, tuple[int | str, ...]]] = [(value, where)]
+    while stack:
+        item, at = stack.pop()
+        if isinstance(item, str):
+            if "\0" in item:
+                return at, item
+        elif isinstance(item, dict):
+            for k, v in item.items():
+                if isinstance(k, str) and "\0" in k:
+                    return at, k
+                stack.append((v, (*at, str(k))))
+        elif isinstance(item, list):
+            stack.extend((v, (*at, i)) for i, v in enumerate(item))
+    return None
+
+
 def mission_from_dict(
     data: Any, *, source: str = "<mission>", base_dir: Path | None = None
 ) -> MissionConfig:
@@ -183,6 +204,14 @@ def mission_from_dict(
     for reserved in ("base_dir", "source"):
         if reserved in data:
             raise ConfigError("unknown key", key=reserved, file=source)
+    nul = _find_nul(data, ())
+    if nul is not None:
+        where, text = nul
+        raise ConfigError(
+            f"a NUL byte in {text!r} (no file name or setting holds one)",
+            key=_key_path(where) or None,
+            file=source,
+        )
     try:
         mission = MissionConfig.model_validate(
             {**data, "base_dir": base_dir or Path("."), "source": source}
@@ -190,6 +219,7 @@ def mission_from_dict(
     except ValidationError as exc:
         err = exc.errors()[0]
         msg = "unknown key" if err["type"] == "extra_forbidden" else err["msg"]
+        msg = msg.removeprefix("Value error, ")
         raise ConfigError(msg, key=_key_path(err["loc"]) or None, file=source) from exc
     mission.executor_options()  # the executor's own checks, errors naming the key
     return mission
@@ -215,6 +245,56 @@ class _UniqueKeyLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep=deep)
 
 
+MAX_YAML_DEPTH = 100
+"""Deeper nesting is refused before PyYAML builds it (its recursive composer would
+end in a RecursionError; no settings file needs more than a handful of levels)."""
+
+
+def _check_depth(text: str, path: Path, key: str | None) -> None:
+    """Walk the YAML events (PyYAML's parser is not recursive) and refuse nesting
+    deeper than MAX_YAML_DEPTH, naming the place and the key path that leads there."""
+    # each open container: [is_mapping, next_is_key, current key/index]
+    stack: list[list[Any]] = []
+    for event in yaml.parse(text, Loader=yaml.SafeLoader):
+        if isinstance(event, yaml.CollectionEndEvent):
+            stack.pop()
+            _advance(stack)
+            continue
+        if not isinstance(event, yaml.NodeEvent):
+            continue
+        top = stack[-1] if stack else None
+        if top is not None and top[0] and top[1]:  # a mapping key
+            value = getattr(event, "value", None)
+            top[2] = value if isinstance(value, str) else "?"
+            top[1] = False
+            if isinstance(event, yaml.CollectionStartEvent):
+                stack.append([isinstance(event, yaml.MappingStartEvent), True, 0])
+            continue
+        if isinstance(event, yaml.CollectionStartEvent):
+            if len(stack) >= MAX_YAML_DEPTH:
+                mark = event.start_mark
+                where = _key_path(tuple(level[2] for level in stack[:4])) + "..."
+                raise ConfigError(
+                    f"nested more than {MAX_YAML_DEPTH} levels deep",
+                    key=f"{key}: {where}" if key else where,
+                    file=f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else str(path),
+                )
+            stack.append([isinstance(event, yaml.MappingStartEvent), True, 0])
+            continue
+        _advance(stack)
+
+
+def _advance(stack: list[list[Any]]) -> None:
+    """A value was completed in the innermost container: expect the next key or item."""
+    if not stack:
+        return
+    top = stack[-1]
+    if top[0]:
+        top[1] = True
+    else:
+        top[2] += 1
+
+
 def load_yaml_file(path: str | Path, what: str = "file", key: str | None = None) -> Any:
     """Read a YAML file a user names (mission, locations, segments, ...).
 
@@ -228,6 +308,7 @@ def load_yaml_file(path: str | Path, what: str = "file", key: str | None = None)
     except TextFileError as exc:
         raise ConfigError(exc.reason, key=key, file=str(exc.location or p)) from exc
     try:
+        _check_depth(text, p, key)
         return yaml.load(text, Loader=_UniqueKeyLoader)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)

@@ -38,6 +38,8 @@ def read_text(path: str | Path, what: str = "file") -> str:
         data = Path(path).read_bytes()
     except OSError as exc:
         raise TextFileError(name, f"cannot read {what}: {exc.strerror or exc}") from exc
+    except ValueError as exc:  # "embedded null byte": no file system allows one in a name
+        raise TextFileError(repr(name), f"cannot read {what}: a NUL byte in its name") from exc
     data = data.removeprefix(codecs.BOM_UTF8)  # Windows editors start files with one
     try:
         return data.decode("utf-8")

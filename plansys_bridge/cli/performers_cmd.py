@@ -19,9 +19,14 @@ from plansys_bridge.cli.options import check_positive
 from plansys_bridge.clock import Clock, run
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.hub.hub import Hub
-from plansys_bridge.mission import build_knowledge, in_mission_file, make_clock, make_transport
+from plansys_bridge.mission import (
+    build_knowledge,
+    in_mission_file,
+    load_domain,
+    make_clock,
+    make_transport,
+)
 from plansys_bridge.mission_config import MissionConfig, load_mission
-from plansys_bridge.pddl.parser import parse_domain_files
 from plansys_bridge.performers.base import ActionPerformer, PerformerContext
 from plansys_bridge.performers.remote import serve_performers
 
@@ -61,7 +66,7 @@ def handle(args: argparse.Namespace) -> int:
 
 
 async def _serve(mission: MissionConfig, clock: Clock, duration: float | None) -> None:
-    domain = parse_domain_files(mission.domain_paths)
+    domain = load_domain(mission)
     knowledge = build_knowledge(mission, domain)
     hub = Hub(make_transport(mission), clock)
     stop = asyncio.Event()
@@ -84,7 +89,9 @@ async def _serve(mission: MissionConfig, clock: Clock, duration: float | None) -
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(stop.wait(), duration)
 
-        await serve_performers(context, entries, until(), on_ready=ready)
+        await serve_performers(
+            context, entries, until(), on_ready=ready, say=lambda line: print(line, flush=True)
+        )
     finally:
         await hub.close()
         for sig in signals:

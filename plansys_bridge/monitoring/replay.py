@@ -349,15 +349,14 @@ def rerun_mission(
     replayed with :func:`replay_plan`. Returns the new recording, ready for
     :func:`compare_missions`.
     """
-    from plansys_bridge.mission import MissionSession, build_knowledge, make_clock
-    from plansys_bridge.pddl.parser import parse_domain_files
+    from plansys_bridge.mission import MissionSession, build_knowledge, load_domain, make_clock
 
     first = recorded if isinstance(recorded, RecordedMission) else read_mission(recorded)
     plan = first.plan
     if plan is None:
         raise MissionBagError(f"{first.path}: the recording holds no plan to re-run")
     config = mission.model_copy(update={"record": str(record_to)})
-    domain = parse_domain_files(config.domain_paths)
+    domain = load_domain(config)
     knowledge = build_knowledge(config, domain)
     clock = make_clock(config)
 

@@ -171,6 +171,10 @@ class ActionPerformer(ABC):
         """Optional: connect to the hardware before the performer takes part in auctions."""
         return None
 
+    def connects_to(self) -> str | None:
+        """Optional: what ``setup()`` connects to (a URL, a bus), shown while it waits."""
+        return None
+
     async def teardown(self) -> None:
         """Optional: release the hardware after the performer stopped."""
         return None

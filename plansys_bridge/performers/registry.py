@@ -8,19 +8,23 @@ nothing until then and is reported as one clear error saying which extra to inst
 
 from __future__ import annotations
 
+import contextlib
 import functools
-from collections.abc import Mapping, Sequence
+import importlib.util
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
-from plansys_bridge.errors import ConfigError, PluginError
-from plansys_bridge.performers.base import ActionPerformer, PerformerContext
+from plansys_bridge.errors import AdapterError, ConfigError, PlansysBridgeError, PluginError
+from plansys_bridge.performers.base import ActionPerformer, PerformerContext, arguments_match
 
 __all__ = [
     "ENTRY_POINT_GROUP",
     "available_performer_kinds",
     "load_performer_kind",
     "performers_from_config",
+    "start_performers",
+    "unserved_actions",
 ]
 
 ENTRY_POINT_GROUP = "plansys_bridge.performers"
@@ -58,9 +62,11 @@ def load_performer_kind(kind: str) -> type[ActionPerformer]:
     except ModuleNotFoundError as exc:
         missing = (exc.name or "").split(".")[0]
         extra = _EXTRA_FOR_MODULE.get(missing)
-        if extra is None and missing in ("plansys_bridge", "plansys_bridge_adapters"):
+        if extra is None and _installed(missing):
+            # the package is there but the module the entry point names is not
             raise PluginError(
-                f"performer kind {kind!r} points at {ep.value}, which does not exist: {exc}"
+                f"performer kind {kind!r} points at {ep.value}: "
+                f"no module named {exc.name!r} (is the entry point misspelt?)"
             ) from exc
         hint = (
             f"install it with: pip install 'plansys-bridge[{extra}]'"
@@ -79,6 +85,64 @@ def load_performer_kind(kind: str) -> type[ActionPerformer]:
             f"performer kind {kind!r} ({ep.value}) is not an ActionPerformer subclass"
         )
     return obj
+
+
+def _installed(module: str) -> bool:
+    """Is the top-level ``module`` importable (its package installed)?"""
+    try:
+        return bool(module) and importlib.util.find_spec(module) is not None
+    except (ImportError, ValueError):
+        return False
+
+
+async def start_performers(
+    performers: Sequence[ActionPerformer], say: Callable[[str], None] | None = None
+) -> list[ActionPerformer]:
+    """Start each performer in turn, saying what it connects to while it does.
+
+    A ``setup()`` that raises (a refused connection, a missing device) is one
+    AdapterError naming the performer and the cause, not a traceback; the performers
+    started before it are stopped first, so nothing is left running.
+    """
+    started: list[ActionPerformer] = []
+    for performer in performers:
+        target = performer.connects_to()
+        if target and say is not None:
+            say(f"{performer.node_name}: connecting to {target} ...")
+        try:
+            await performer.start()
+        except Exception as exc:
+            for other in reversed(started):
+                with contextlib.suppress(Exception):
+                    await other.stop()
+            cause = str(exc) if isinstance(exc, PlansysBridgeError) else _describe(exc)
+            raise AdapterError(
+                f"performer {performer.node_name!r} could not start: {cause}"
+            ) from exc
+        started.append(performer)
+    return started
+
+
+def _describe(exc: BaseException) -> str:
+    """``ConnectionRefusedError: [Errno 111] Connection refused`` style, one line."""
+    text = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def unserved_actions(
+    calls: Iterable[tuple[str, Sequence[str]]], performers: Sequence[ActionPerformer]
+) -> list[str]:
+    """The action calls (``(move r1 a b)``) that no performer offers, by name and
+    specialised arguments, in plan order: the auction for them could only time out."""
+    missing: list[str] = []
+    for name, arguments in calls:
+        offered = any(
+            name in p.actions and arguments_match(p.actions[name], arguments) for p in performers
+        )
+        text = f"({' '.join([name, *arguments])})"
+        if not offered and text not in missing:
+            missing.append(text)
+    return missing
 
 
 def performers_from_config(

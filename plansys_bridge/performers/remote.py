@@ -24,7 +24,7 @@ from plansys_bridge.errors import HubError
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.messages import ActionPerformerStatus, Topics
 from plansys_bridge.performers.base import ActionPerformer, PerformerContext
-from plansys_bridge.performers.registry import performers_from_config
+from plansys_bridge.performers.registry import performers_from_config, start_performers
 
 __all__ = ["serve_performers", "wait_for_performers"]
 
@@ -65,6 +65,7 @@ async def serve_performers(
     until: Awaitable[object],
     *,
     on_ready: Callable[[list[ActionPerformer]], None] | None = None,
+    say: Callable[[str], None] | None = None,
 ) -> list[ActionPerformer]:
     """Start the performers of ``entries`` on ``context.hub``, serve until ``until`` is done.
 
@@ -73,11 +74,8 @@ async def serve_performers(
     status before the process leaves the domain.
     """
     performers = performers_from_config(entries, context)
-    started: list[ActionPerformer] = []
+    started = await start_performers(performers, say)
     try:
-        for performer in performers:
-            await performer.start()
-            started.append(performer)
         if on_ready is not None:
             on_ready(started)
         await until

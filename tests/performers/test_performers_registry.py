@@ -61,12 +61,23 @@ def test_wrong_target_and_non_performer_class(monkeypatch: pytest.MonkeyPatch) -
         typo="plansys_bridge.performers.simulated:SimulatedPerformr",
         notperf="plansys_bridge.hub.hub:Hub",
     )
-    with pytest.raises(PluginError, match="does not exist"):
+    with pytest.raises(
+        PluginError, match=r"no module named 'plansys_bridge\.performers\.no_such_module'"
+    ):
         registry.load_performer_kind("gone")
     with pytest.raises(PluginError, match="could not be loaded"):
         registry.load_performer_kind("typo")
     with pytest.raises(PluginError, match="not an ActionPerformer subclass"):
         registry.load_performer_kind("notperf")
+
+
+def test_missing_module_of_an_installed_package_is_named(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``pkg.missing_module:X`` with pkg installed: the module is missing, not the package."""
+    _fake_entry_points(monkeypatch, third="yaml.no_such_adapter:Performer")
+    with pytest.raises(PluginError) as err:
+        registry.load_performer_kind("third")
+    assert "no module named 'yaml.no_such_adapter'" in str(err.value)
+    assert "install the package" not in str(err.value)
 
 
 def test_performers_from_config_names_the_entry(virtual_hub: Hub) -> None:

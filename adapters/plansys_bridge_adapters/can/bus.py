@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import difflib
 import logging
 from collections import Counter
 from collections.abc import Callable, Mapping
@@ -64,9 +65,51 @@ class BusConfig:
     """After a driver error, try to reopen the interface this often (None: never)."""
     options: Mapping[str, Any] = field(default_factory=dict)
     """Extra keyword arguments for :class:`can.Bus` (e.g. ``fd``, ``receive_own_messages``)."""
+    origin: str = "the mission file"
+    """Where interface and channel came from (the mission file, python-can's config)."""
 
     def describe(self) -> str:
         return f"{self.interface}:{self.channel}"
+
+
+PYTHON_CAN_CONFIG = "python-can's configuration (CAN_INTERFACE/CAN_CHANNEL, can.rc, ~/.canrc)"
+
+
+def choose_interface(
+    interface: str | None, channel: str | None, *, simulated: bool
+) -> tuple[str, str, str]:
+    """Interface, channel and their origin for a bus entry, checked before anything opens.
+
+    A named interface must be one python-can knows (a typo such as ``socketcann`` is an
+    error now, not 30 s of silence later). Without one, python-can's own configuration
+    chain decides, as it does for ``can.Bus()``; with nothing configured there, only a
+    simulated base falls back to the virtual bus, saying so.
+    """
+    if interface is not None:
+        _check_known(interface, "interface")
+        return interface, channel or "plansys_can0", "the mission file"
+    found: dict[str, Any] = {}
+    # python-can's own order (can.util.load_config): can.rc, environment, config files
+    for source in (can.rc, can.util.load_environment_config(), can.util.load_file_config()):
+        for name, value in source.items():
+            found.setdefault("interface" if name == "bustype" else name, value)
+    if found.get("interface"):
+        name = str(found["interface"])
+        _check_known(name, f"interface from {PYTHON_CAN_CONFIG}")
+        return name, str(found.get("channel") or channel or "can0"), PYTHON_CAN_CONFIG
+    if simulated:
+        return "virtual", channel or "plansys_can0", "the default for a simulated base"
+    raise ValueError(
+        f"no CAN interface: give bus.interface (e.g. socketcan) or set one in {PYTHON_CAN_CONFIG}"
+    )
+
+
+def _check_known(interface: str, what: str) -> None:
+    known = sorted(can.interfaces.VALID_INTERFACES)
+    if interface not in known:
+        close = difflib.get_close_matches(interface, known, n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else f" (known: {', '.join(known)})"
+        raise ValueError(f"unknown python-can {what} {interface!r}{hint}")
 
 
 @dataclass

@@ -147,6 +147,10 @@ class CanBasePerformer(ActionPerformer):
 
     # -- lifecycle ----------------------------------------------------------------
 
+    def connects_to(self) -> str:
+        bus = self.settings.bus
+        return f"CAN bus {bus.describe()} (from {bus.origin})"
+
     async def setup(self) -> None:
         if self.settings.simulate_base is not None:
             self.double = BaseDouble(

@@ -32,7 +32,7 @@ from typing import Any, TypeVar, Union, get_args, get_origin, get_type_hints
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.mission_config import load_yaml_file
 
-from .bus import BusConfig
+from .bus import BusConfig, choose_interface
 from .controller import ControllerConfig, MotionLimits
 from .double import BaseDoubleConfig, BaseLimits
 
@@ -334,9 +334,9 @@ def parse_controller(value: object, key: str) -> ControllerConfig:
         raise
 
 
-def parse_bus(value: object, key: str) -> BusConfig:
+def parse_bus(value: object, key: str, *, simulated: bool = False) -> BusConfig:
     if value is None:
-        return BusConfig()
+        value = {}
     if not isinstance(value, Mapping):
         raise ConfigError(f"must be a mapping, got {value!r}", key=key)
     allowed = (
@@ -352,13 +352,13 @@ def parse_bus(value: object, key: str) -> BusConfig:
     for item in value:
         if item not in allowed:
             raise ConfigError(f"unknown key (allowed: {', '.join(allowed)})", key=f"{key}.{item}")
-    interface = value.get("interface", "virtual")
-    channel = value.get("channel", "plansys_can0")
-    if not isinstance(interface, str) or not interface:
+    interface = value.get("interface")
+    channel = value.get("channel")
+    if interface is not None and (not isinstance(interface, str) or not interface):
         raise ConfigError(
             f"must be a python-can interface name, got {interface!r}", key=f"{key}.interface"
         )
-    if not isinstance(channel, str | int) or isinstance(channel, bool):
+    if channel is not None and (not isinstance(channel, str | int) or isinstance(channel, bool)):
         raise ConfigError(f"must be a channel name, got {channel!r}", key=f"{key}.channel")
     bitrate = value.get("bitrate")
     if bitrate is not None and (
@@ -377,6 +377,12 @@ def parse_bus(value: object, key: str) -> BusConfig:
     }
     reopen = value.get("reopen_period", 1.0)
     reopen_period = None if reopen is None else _positive(reopen, f"{key}.reopen_period")
+    try:
+        interface, channel, origin = choose_interface(
+            interface, None if channel is None else str(channel), simulated=simulated
+        )
+    except ValueError as exc:
+        raise ConfigError(str(exc), key=f"{key}.interface") from exc
     return BusConfig(
         interface=interface,
         reopen_period=reopen_period,
@@ -384,6 +390,7 @@ def parse_bus(value: object, key: str) -> BusConfig:
         bitrate=bitrate,
         reader=reader,
         options=dict(options),
+        origin=origin,
         **timing,
     )
 
@@ -426,7 +433,8 @@ def parse_settings(
     if "locations" not in settings:
         raise ConfigError("missing: a locations file or mapping", key=f"{key}.locations")
     locations = load_locations(settings["locations"], base_dir, f"{key}.locations")
-    bus = parse_bus(settings.get("bus"), f"{key}.bus")
+    simulated = settings.get("simulate_base") not in (None, False)
+    bus = parse_bus(settings.get("bus"), f"{key}.bus", simulated=simulated)
     dbc_value = settings.get("dbc")
     dbc: Path | None = None
     if dbc_value is not None:

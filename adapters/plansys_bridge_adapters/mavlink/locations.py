@@ -113,6 +113,8 @@ def parse_locations(data: object, *, source: str, key: str) -> LocationMap:
     default_alt = None
     if data.get("default_alt") is not None:
         default_alt = _number(data["default_alt"], err, "default_alt")
+        if default_alt <= 0:
+            raise err(f"must be > 0 metres above home, got {default_alt:g}", "default_alt")
     raw = data.get("locations")
     if not isinstance(raw, Mapping) or not raw:
         raise err("must map location names to positions", "locations")

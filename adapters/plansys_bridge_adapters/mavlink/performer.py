@@ -95,6 +95,10 @@ class MavlinkPerformer(ActionPerformer):
         self._last_feedback = -1e9
 
     # -------------------------------------------------------------- lifecycle
+    def connects_to(self) -> str:
+        s = self.settings
+        return f"MAVLink {s.url}" if s.url else f"the simulated {s.model or 'copter'} (double)"
+
     async def setup(self) -> None:
         s = self.settings
         url = s.url

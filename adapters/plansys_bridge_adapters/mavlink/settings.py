@@ -6,6 +6,8 @@ before any link is opened.
 
 from __future__ import annotations
 
+import difflib
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -143,6 +145,32 @@ def specialise(
     return out
 
 
+NETWORK_SCHEMES = ("tcp", "tcpin", "udp", "udpin", "udpout", "udpbcast")
+
+
+def url_problem(url: str) -> str | None:
+    """What is wrong with a link URL, found before any link opens (None: nothing).
+
+    pymavlink reads anything that is not a network URL as a serial device, so a
+    misspelt scheme (``tpc:127.0.0.1:5760``) would otherwise wait out the connect
+    timeout on a device that does not exist.
+    """
+    scheme, sep, rest = url.partition(":")
+    if scheme in NETWORK_SCHEMES:
+        host, _, port = rest.rpartition(":")
+        if not host or not port.isdigit() or not 0 < int(port) < 65536:
+            return f"a network URL must look like {scheme}:HOST:PORT"
+        return None
+    if not sep or scheme == "serial" or url.startswith(("/", ".")):
+        return None  # a serial device path, optionally :BAUD
+    if re.fullmatch(r"COM\d+", scheme, re.IGNORECASE) or rest.isdigit():
+        return None  # COM3:57600, ttyUSB0:57600
+    close = difflib.get_close_matches(scheme.lower(), [*NETWORK_SCHEMES, "serial"], n=1)
+    hint = f"; did you mean {close[0]}:?" if close else ""
+    known = ", ".join(f"{s}:" for s in (*NETWORK_SCHEMES, "serial"))
+    return f"unknown link scheme {scheme!r}{hint} (known: {known} or a device path)"
+
+
 def parse_settings(raw: Mapping[str, Any], name: str, base_dir: Path, key: str) -> MavlinkSettings:
     """Check the kind-specific keys; every error names its key."""
     values: dict[str, Any] = {}
@@ -165,6 +193,9 @@ def parse_settings(raw: Mapping[str, Any], name: str, base_dir: Path, key: str) 
                 f"must be a MAVLink URL like tcp:127.0.0.1:5760, got {url!r}", key=f"{key}.url"
             )
         values["url"] = url.strip()
+        problem = url_problem(values["url"])
+        if problem:
+            raise ConfigError(f"{values['url']}: {problem}", key=f"{key}.url")
     if double is not None:
         values["double"] = _double(double, f"{key}.double")
     model = raw.get("model")

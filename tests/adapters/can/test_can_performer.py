@@ -395,15 +395,62 @@ def test_config_errors_name_the_key(
     assert info.value.key == key, str(info.value)
 
 
+def test_misspelt_interface_is_refused_at_load(hub: Hub) -> None:
+    context = PerformerContext(hub=hub, clock=hub.clock)
+    entry = base_entry("can0", bus={"interface": "socketcann", "channel": "can0"})
+    with pytest.raises(ConfigError) as err:
+        CanBasePerformer.from_config(entry, context)
+    assert err.value.key == "performer.bus.interface"
+    assert "did you mean 'socketcan'?" in str(err.value)
+
+
 def test_unopenable_interface_is_named(hub: Hub) -> None:
     async def main() -> None:
         context = PerformerContext(hub=hub, clock=hub.clock)
-        entry = base_entry("can0", bus={"interface": "nosuchcan", "channel": "can0"})
+        entry = base_entry("nosuchcan0", bus={"interface": "socketcan", "channel": "nosuchcan0"})
         [performer] = CanBasePerformer.from_config(entry, context)
-        with pytest.raises(BusOpenError, match="cannot open CAN bus nosuchcan:can0"):
+        with pytest.raises(BusOpenError, match="cannot open CAN bus socketcan:nosuchcan0"):
             await performer.start()
 
     run(main(), hub.clock)
+
+
+@pytest.mark.parametrize("source", ["environment", "can.rc"])
+def test_bus_without_interface_follows_python_can_config(
+    hub: Hub, monkeypatch: pytest.MonkeyPatch, source: str
+) -> None:
+    """No ``bus.interface``: python-can's own configuration chain decides, and the
+    performer says which bus that is (it used to fall back to a virtual bus silently)."""
+    import can
+
+    monkeypatch.delenv("CAN_INTERFACE", raising=False)
+    monkeypatch.delenv("CAN_CHANNEL", raising=False)
+    monkeypatch.setattr(can.util, "load_file_config", lambda *a, **k: {})
+    if source == "environment":
+        monkeypatch.setenv("CAN_INTERFACE", "socketcan")
+        monkeypatch.setenv("CAN_CHANNEL", "can7")
+    else:
+        monkeypatch.setattr(can, "rc", {"interface": "socketcan", "channel": "can7"})
+    entry = base_entry("x", bus=None)
+    entry.pop("bus")
+    [performer] = CanBasePerformer.from_config(entry, PerformerContext(hub=hub, clock=hub.clock))
+    assert isinstance(performer, CanBasePerformer)
+    assert performer.settings.bus.describe() == "socketcan:can7"
+    assert "socketcan:can7 (from python-can's configuration" in performer.connects_to()
+
+
+def test_bus_without_any_interface_is_an_error(hub: Hub, monkeypatch: pytest.MonkeyPatch) -> None:
+    import can
+
+    monkeypatch.delenv("CAN_INTERFACE", raising=False)
+    monkeypatch.setattr(can, "rc", {})
+    monkeypatch.setattr(can.util, "load_file_config", lambda *a, **k: {})
+    entry = base_entry("x")
+    entry.pop("bus")
+    with pytest.raises(ConfigError) as err:
+        CanBasePerformer.from_config(entry, PerformerContext(hub=hub, clock=hub.clock))
+    assert err.value.key == "performer.bus.interface"
+    assert "no CAN interface" in str(err.value)
 
 
 def test_move_on_a_scaled_wall_clock_with_the_notifier_reader(channel: str) -> None:
