@@ -1,0 +1,106 @@
+"""The node's own XML-RPC server: the ROS 1 "slave API" the master and peers call.
+
+The master tells a subscriber which publishers exist (``publisherUpdate``); a
+subscriber asks a publisher where to connect (``requestTopic``); tools ask for
+``getBusInfo``, ``getPid`` and so on. ``xmlrpc.server`` is blocking, so the server
+runs in its own thread and hands anything that touches the node to the node's event
+loop.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import socketserver
+import threading
+from typing import TYPE_CHECKING, Any
+from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
+
+if TYPE_CHECKING:
+    from plansys_bridge.ros1.node import Node
+
+__all__ = ["SlaveServer"]
+
+log = logging.getLogger(__name__)
+
+
+class _Server(socketserver.ThreadingMixIn, SimpleXMLRPCServer):
+    daemon_threads = True
+    allow_reuse_address = True
+
+
+class _Quiet(SimpleXMLRPCRequestHandler):
+    def log_message(self, format: str, *args: Any) -> None:
+        return None
+
+
+class SlaveServer:
+    """Serves the slave API of ``node`` on ``bind``:0 until :meth:`close`."""
+
+    def __init__(self, node: Node, bind: str) -> None:
+        self.node = node
+        self._server = _Server((bind, 0), requestHandler=_Quiet, allow_none=True, logRequests=False)
+        self.port: int = self._server.server_address[1]
+        for name in (
+            "getBusStats",
+            "getBusInfo",
+            "getMasterUri",
+            "shutdown",
+            "getPid",
+            "getSubscriptions",
+            "getPublications",
+            "paramUpdate",
+            "publisherUpdate",
+            "requestTopic",
+        ):
+            self._server.register_function(getattr(self, name), name)
+        self._thread = threading.Thread(
+            target=self._server.serve_forever,
+            kwargs={"poll_interval": 0.1},
+            name=f"ros1-xmlrpc-{node.name}",
+            daemon=True,
+        )
+        self._thread.start()
+
+    def close(self) -> None:
+        self._server.shutdown()
+        self._server.server_close()
+        self._thread.join(timeout=5)
+
+    # ------------------------------------------------------------ the slave API
+
+    def getBusStats(self, caller_id: str) -> list[Any]:
+        return [1, "", [[], [], []]]
+
+    def getBusInfo(self, caller_id: str) -> list[Any]:
+        return [1, "", self.node.bus_info()]
+
+    def getMasterUri(self, caller_id: str) -> list[Any]:
+        return [1, "", self.node.master_uri]
+
+    def shutdown(self, caller_id: str, msg: str = "") -> list[Any]:
+        log.warning("ROS 1 node %s: %s asked it to shut down (%s)", self.node.name, caller_id, msg)
+        return [1, "", 0]
+
+    def getPid(self, caller_id: str) -> list[Any]:
+        return [1, "", os.getpid()]
+
+    def getSubscriptions(self, caller_id: str) -> list[Any]:
+        return [1, "", self.node.subscriptions()]
+
+    def getPublications(self, caller_id: str) -> list[Any]:
+        return [1, "", self.node.publications()]
+
+    def paramUpdate(self, caller_id: str, key: str, value: Any) -> list[Any]:
+        return [1, "", 0]
+
+    def publisherUpdate(self, caller_id: str, topic: str, publishers: list[str]) -> list[Any]:
+        self.node.call_soon(self.node.publisher_update, topic, list(publishers))
+        return [1, "", 0]
+
+    def requestTopic(self, caller_id: str, topic: str, protocols: list[Any]) -> list[Any]:
+        if topic not in self.node.publishers:
+            return [-1, f"{self.node.name} does not publish {topic}", []]
+        if not any(isinstance(p, list) and p and p[0] == "TCPROS" for p in protocols):
+            return [0, "only TCPROS is supported", []]
+        return [1, "ready on TCPROS", ["TCPROS", self.node.host, self.node.tcp_port]]

@@ -1,0 +1,66 @@
+"""The actionlib client against rospy's SimpleActionServer (a move_base double)."""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Any
+
+from plansys_bridge.ros1 import Node
+from plansys_bridge.ros1.actionlib import ActionClient, GoalStatus
+from plansys_bridge.ros1.roscore import Roscore
+
+
+def goal_to(node: Node, x: float, frame: str = "map") -> Any:
+    goal = node.types.new("move_base_msgs/MoveBaseGoal")
+    goal.target_pose.header.frame_id = frame
+    goal.target_pose.pose.position.x = x
+    goal.target_pose.pose.orientation.w = 1.0
+    return goal
+
+
+def test_goal_feedback_result_cancel_abort(roscore: Roscore, start_peer: Any) -> None:
+    async def main() -> None:
+        await asyncio.to_thread(start_peer, "move_base_double.py", "/mb_a", "10")
+        async with Node("action_test", master_uri=roscore.uri) as node:
+            client = await ActionClient.create(node, "/mb_a", "move_base_msgs/MoveBase")
+            assert await client.wait_for_server(20)
+            seen: list[float] = []
+            handle = client.send_goal(
+                goal_to(node, 2.0), lambda fb: seen.append(fb.base_position.pose.position.x)
+            )
+            outcome = await handle.result()
+            assert (outcome.status, outcome.text) == (GoalStatus.SUCCEEDED, "goal reached")
+            assert seen and seen[-1] == 2.0 and seen == sorted(seen)
+
+            handle = client.send_goal(goal_to(node, 40.0))
+            while handle.status is not GoalStatus.ACTIVE:
+                await asyncio.sleep(0.05)
+            handle.cancel()
+            outcome = await handle.result()
+            assert (outcome.status, outcome.text) == (GoalStatus.PREEMPTED, "cancelled by client")
+
+            outcome = await client.send_goal(goal_to(node, -60.0)).result()
+            assert (outcome.status, outcome.text) == (GoalStatus.ABORTED, "no path to goal")
+            await client.close()
+
+    asyncio.run(main())
+
+
+def test_server_that_dies_loses_the_goal(roscore: Roscore, start_peer: Any) -> None:
+    async def main() -> None:
+        server = await asyncio.to_thread(start_peer, "move_base_double.py", "/mb_b", "0.5")
+        async with Node("action_lost", master_uri=roscore.uri) as node:
+            client = await ActionClient.create(
+                node, "/mb_b", "move_base_msgs/MoveBase", server_timeout=1.0
+            )
+            assert await client.wait_for_server(20)
+            handle = client.send_goal(goal_to(node, 30.0))
+            while handle.status is not GoalStatus.ACTIVE:
+                await asyncio.sleep(0.05)
+            await asyncio.to_thread(server.stop)
+            outcome = await asyncio.wait_for(handle.result(), 20)
+            assert outcome.status is GoalStatus.LOST
+            assert "sent no status for 1 s" in outcome.text
+            await client.close()
+
+    asyncio.run(main())
