@@ -277,6 +277,7 @@ class MissionSession:
         self._overrides = performer_overrides or {}
         self._tasks: list[asyncio.Task[None]] = []
         self._unsubscribe: Callable[[], None] | None = None
+        self.bridge: Any = None
 
     async def __aenter__(self) -> MissionSession:
         await self.hub.start()
@@ -295,6 +296,8 @@ class MissionSession:
                 recorder=self.recorder,
             )
             entries = [p.model_dump() | self._overrides for p in self.mission.performers]
+            if self.mission.bridge is not None:
+                await self._start_bridge()
             if self.local_performers:
                 with in_mission_file(self.mission):
                     self.performers = performers_from_config(entries, context)
@@ -325,6 +328,17 @@ class MissionSession:
             self.hub, names, timeout=self.mission.transport.peer_timeout, where=self.mission.source
         )
 
+    async def _start_bridge(self) -> None:
+        from plansys_bridge.bridge.bridge import Bridge
+        from plansys_bridge.bridge.config import parse_bridge_config
+
+        config = parse_bridge_config(
+            self.mission.bridge, source=self.mission.source or "", key="bridge"
+        )
+        self.bridge = Bridge(config)
+        await self.bridge.start()
+        self._say(f"bridge: {len(config.routes)} topics between ROS 1 and ROS 2")
+
     async def _shutdown(self) -> None:
         for task in self._tasks:
             task.cancel()
@@ -338,6 +352,9 @@ class MissionSession:
                 await performer.stop()
             except Exception:  # a broken adapter must not keep the others running
                 log.exception("stopping performer %s failed", performer.node_name)
+        if self.bridge is not None:
+            await self.bridge.stop()
+            self.bridge = None
         if self.recorder is not None:
             self.recorder.close()
         await self.hub.close()

@@ -116,6 +116,9 @@ class MissionConfig(_Strict):
     """Write the whole run to this ROS 2 bag (mcap)."""
     timeout: float | None = Field(None, gt=0)
     """Give up the mission after this many seconds of mission time."""
+    bridge: dict[str, Any] | None = None
+    """ROS 1 <-> ROS 2 topics to bridge while the mission runs (a bridge file's keys:
+    ``ros1``, ``ros2``, ``topics``); checked by :mod:`plansys_bridge.bridge.config`."""
 
     base_dir: Path = Path(".")
     source: str = "<mission>"
@@ -222,6 +225,10 @@ def mission_from_dict(
         msg = msg.removeprefix("Value error, ")
         raise ConfigError(msg, key=_key_path(err["loc"]) or None, file=source) from exc
     mission.executor_options()  # the executor's own checks, errors naming the key
+    if mission.bridge is not None:
+        from plansys_bridge.bridge.config import parse_bridge_config
+
+        parse_bridge_config(mission.bridge, source=source or "", key="bridge")
     return mission
 
 

@@ -17,7 +17,7 @@ from plansys_bridge.cli.signals import sigterm_interrupts
 from plansys_bridge.cli.verbosity import add_verbosity, configure_logging
 from plansys_bridge.errors import PlansysBridgeError
 
-SUBCOMMANDS = ("validate", "plan", "run", "experiment", "terminal", "demo", "performers")
+SUBCOMMANDS = ("validate", "plan", "run", "experiment", "terminal", "demo", "performers", "bridge")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -26,7 +26,17 @@ from rosbags.typesys.store import Typestore
 
 from plansys_bridge.ros1.errors import Ros1Error
 
-__all__ = ["INTERFACES_DIR", "Ros1Types", "action_texts", "ros1_name", "store_name"]
+__all__ = [
+    "INTERFACES_DIR",
+    "Ros1Types",
+    "action_texts",
+    "default_value",
+    "ros1_name",
+    "store_name",
+]
+
+_BASE, _NAME, _ARRAY = 1, 2, 3
+"""rosbags' field kinds (Nodetype): a base type, a named message, a fixed array."""
 
 INTERFACES_DIR = Path(__file__).resolve().parents[1] / "interfaces" / "ros1"
 """Vendored upstream ROS 1 interface texts, one folder per package (see SOURCE.md there)."""
@@ -81,6 +91,21 @@ def _vendored_texts(root: Path) -> dict[str, str]:
         generated = action_texts(pkg, path.stem, path.read_text(encoding="utf-8"))
         texts.update({f"{pkg}/msg/{name}": body for name, body in generated.items()})
     return texts
+
+
+def default_value(desc: Any, store: Typestore) -> Any:
+    """The zero value of a field described by ``desc`` (rosbags' field description)."""
+    kind, arg = desc
+    if kind == _BASE:
+        return "" if arg[0] == "string" else False if arg[0] == "bool" else 0
+    if kind == _NAME:
+        fields = store.fielddefs[arg][1]
+        return store.types[arg](**{f: default_value(d, store) for f, d in fields})
+    (sub_kind, sub), count = arg
+    length = count if kind == _ARRAY else 0
+    if sub_kind == _BASE and sub[0] != "string":
+        return np.zeros(length, dtype=_NUMPY.get(sub[0], "float64"))
+    return [default_value((sub_kind, sub), store) for _ in range(length)]
 
 
 class Ros1Types:
@@ -148,27 +173,10 @@ class Ros1Types:
             if field in fields:
                 values[field] = fields.pop(field)
             else:
-                values[field] = self._default(desc)
+                values[field] = default_value(desc, self.store)
         if fields:
             raise Ros1Error(f"{name} has no field(s) {', '.join(sorted(fields))}")
         return self.store.types[key](**values)
-
-    def _default(self, desc: Any) -> Any:
-        kind, arg = desc
-        if kind == 1:  # BASE
-            base = arg[0]
-            return "" if base == "string" else False if base == "bool" else 0
-        if kind == 2:  # NAME
-            return self.new(arg)
-        if kind == 3:  # ARRAY (fixed length)
-            (sub_kind, sub), count = arg
-            if sub_kind == 1 and sub[0] != "string":
-                return np.zeros(count, dtype=_NUMPY.get(sub[0], "float64"))
-            return [self._default((sub_kind, sub)) for _ in range(count)]
-        (sub_kind, sub), _count = arg
-        if sub_kind == 1 and sub[0] != "string":
-            return np.zeros(0, dtype=_NUMPY.get(sub[0], "float64"))
-        return []
 
     def serialize(self, msg: object, name: str) -> bytes:
         try:

@@ -1,0 +1,1 @@
+"""ROS 1 <-> ROS 2 topic bridge."""
