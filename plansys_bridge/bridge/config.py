@@ -128,6 +128,14 @@ def parse_bridge_config(data: object, *, source: str = "", key: str = "") -> Bri
                 source,
             )
         seen[ident] = route.key
+    for route in routes:
+        back = seen.get(("ros2" if route.direction == "ros1" else "ros1", route.target))
+        if back is not None:
+            raise _err(
+                f"{route.target} would go round in a loop: {back} bridges it back",
+                route.key,
+                source,
+            )
     return BridgeConfig(master_uri, domain_id, tuple(routes), source)
 
 

@@ -20,6 +20,7 @@ from typing import Any
 
 from cyclonedds.core import Listener, Policy, Qos
 from cyclonedds.domain import DomainParticipant
+from cyclonedds.idl import IdlStruct
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
@@ -117,6 +118,8 @@ class Ros2Side:
 
         def on_data(reader: DataReader) -> None:
             for sample in reader.take(64):
+                if not isinstance(sample, IdlStruct):
+                    continue  # an InvalidSample: a writer went away (no data)
                 raw = sample.serialize()
                 with contextlib.suppress(RuntimeError):  # the loop closed while stopping
                     loop.call_soon_threadsafe(deliver, raw)

@@ -217,7 +217,7 @@ class Subscriber:
                     self._dropped.add(uri)
                     return
                 except (OSError, EOFError, MasterError, Ros1Error) as exc:
-                    log.debug("ROS 1 topic %s: publisher %s: %s", self.topic, uri, exc)
+                    log.debug("ROS 1 topic %s: publisher %s: %r", self.topic, uri, exc)
                 await asyncio.sleep(delay)
                 delay = min(2.0, delay * 2)
         finally:

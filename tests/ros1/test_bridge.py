@@ -227,3 +227,15 @@ def test_bad_bridge_entries_name_their_key(entry: dict[str, Any], key: str, text
         )
     message = str(info.value)
     assert message.startswith(f"b.yaml:{key}:") and text in message, message
+
+
+def test_a_topic_bridged_both_ways_is_refused() -> None:
+    from plansys_bridge.errors import ConfigError
+
+    topics = [
+        {"topic": "/a", "to": "/b", "type": "std_msgs/msg/String", "from": "ros1"},
+        {"topic": "/b", "to": "/a", "type": "std_msgs/msg/String", "from": "ros2"},
+    ]
+    loop = r"topics\[0\]: /b would go round in a loop: topics\[1\] bridges it back"
+    with pytest.raises(ConfigError, match=loop):
+        parse_bridge_config({"ros2": {"domain_id": 1}, "topics": topics}, source="b.yaml")
