@@ -1,0 +1,204 @@
+"""PlanSys2's ``Node`` / ``Tree`` / ``Param`` messages to and from PDDL.
+
+PlanSys2's services carry facts, fluents and goals as ``plansys2_msgs/Node`` and
+``plansys2_msgs/Tree`` (a flat list of nodes, node 0 the root, ``children`` indexing
+into the list). PlanSys2 itself reads them by printing PDDL
+(``parser::pddl::toString``) and writes them by parsing PDDL; this module does the
+same against the project's PDDL model, so every check the knowledge base makes on
+PDDL text applies to what a ROS 2 client sends.
+
+Node types and constants are those of ``plansys2_msgs/msg/Node.msg``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from plansys_bridge.errors import KnowledgeError
+from plansys_bridge.interfaces.dds import dds_type, ros2_constants
+from plansys_bridge.pddl.model import (
+    And,
+    Atom,
+    BinaryOp,
+    Compare,
+    Condition,
+    DurationRef,
+    Equals,
+    Exists,
+    FluentRef,
+    FluentValue,
+    Forall,
+    Imply,
+    Negate,
+    Not,
+    Number,
+    NumExpr,
+    Or,
+)
+from plansys_bridge.pddl.writer import write_number
+
+__all__ = [
+    "atom_node",
+    "condition_tree",
+    "fluent_node",
+    "node_text",
+    "param",
+    "tree_text",
+]
+
+_N = ros2_constants("plansys2_msgs/msg/Node")
+_COMPARE = {"=": "COMP_EQ", ">=": "COMP_GE", ">": "COMP_GT", "<=": "COMP_LE", "<": "COMP_LT"}
+_ARITH = {"*": "ARITH_MULT", "/": "ARITH_DIV", "+": "ARITH_ADD", "-": "ARITH_SUB"}
+_OPERATOR = {_N[v]: k for k, v in (_COMPARE | _ARITH).items()}
+
+
+def _node_type() -> type[Any]:
+    return dds_type("plansys2_msgs/msg/Node")
+
+
+def param(name: str, type: str = "") -> Any:
+    """A ``plansys2_msgs/Param``."""
+    return dds_type("plansys2_msgs/msg/Param")(name=name, type=type)
+
+
+def atom_node(atom: Atom, node_id: int = 0) -> Any:
+    """A fact as PlanSys2's PREDICATE node (parameters are the objects)."""
+    return _node_type()(
+        node_type=_N["PREDICATE"],
+        node_id=node_id,
+        name=atom.predicate,
+        parameters=[param(a) for a in atom.args],
+    )
+
+
+def fluent_node(fluent: FluentRef | FluentValue, node_id: int = 0) -> Any:
+    """A fluent (with its value, for a FluentValue) as a FUNCTION node."""
+    ref = fluent.fluent if isinstance(fluent, FluentValue) else fluent
+    value = fluent.value if isinstance(fluent, FluentValue) else 0.0
+    return _node_type()(
+        node_type=_N["FUNCTION"],
+        node_id=node_id,
+        name=ref.name,
+        parameters=[param(a) for a in ref.args],
+        value=float(value),
+    )
+
+
+def _application(node: Any) -> str:
+    return "(" + " ".join([node.name, *(p.name for p in node.parameters)]) + ")"
+
+
+def node_text(node: Any) -> str:
+    """A single PREDICATE or FUNCTION node as PDDL: ``(at r1 kitchen)``, ``(= (battery r1) 80)``."""
+    if node.node_type == _N["PREDICATE"]:
+        return _application(node)
+    if node.node_type == _N["FUNCTION"]:
+        return f"(= {_application(node)} {write_number(node.value)})"
+    raise KnowledgeError(
+        f"node {node.name!r}: expected a PREDICATE or FUNCTION node, got type {node.node_type}"
+    )
+
+
+def tree_text(tree: Any) -> str:
+    """A Tree as PDDL, as PlanSys2's ``parser::pddl::toString(tree)``."""
+    nodes = list(tree.nodes)
+    if not nodes:
+        return ""
+    return _text(nodes, 0, set())
+
+
+def _text(nodes: list[Any], index: int, seen: set[int]) -> str:
+    if not 0 <= index < len(nodes):
+        raise KnowledgeError(f"tree node {index} does not exist ({len(nodes)} nodes)")
+    if index in seen:
+        raise KnowledgeError(f"tree node {index} is reached twice (the tree has a cycle)")
+    seen.add(index)
+    node = nodes[index]
+    kids = [_text(nodes, int(c), seen) for c in node.children]
+    t = node.node_type
+    if t in (_N["AND"], _N["OR"]):
+        text = "(" + " ".join(["and" if t == _N["AND"] else "or", *kids]) + ")"
+    elif t == _N["NOT"]:
+        text = f"(not {' '.join(kids)})"
+    elif t in (_N["PREDICATE"], _N["FUNCTION"]):
+        text = _application(node)
+    elif t == _N["NUMBER"]:
+        text = write_number(node.value)
+    elif t == _N["CONSTANT"] or t == _N["PARAMETER"]:
+        text = node.name
+    elif t == _N["EXPRESSION"]:
+        op = _OPERATOR.get(node.expression_type)
+        if op is None:
+            raise KnowledgeError(f"tree node {index}: unknown expression type")
+        text = f"({op} {' '.join(kids)})"
+    elif t == _N["EXISTS"]:
+        variables = " ".join(f"{p.name} - {p.type or 'object'}" for p in node.parameters)
+        text = f"(exists ({variables}) {' '.join(kids)})"
+    else:
+        raise KnowledgeError(f"tree node {index}: node type {t} cannot appear in a condition")
+    return f"(not {text})" if node.negate else text
+
+
+def condition_tree(cond: Condition) -> Any:
+    """A condition as PlanSys2's Tree (node 0 the root)."""
+    nodes: list[Any] = []
+    _add_condition(nodes, cond)
+    return dds_type("plansys2_msgs/msg/Tree")(nodes=nodes)
+
+
+def _new(nodes: list[Any], **fields: Any) -> Any:
+    node = _node_type()(node_id=len(nodes), **fields)
+    nodes.append(node)
+    return node
+
+
+def _add_condition(nodes: list[Any], cond: Condition) -> int:
+    if isinstance(cond, Atom):
+        nodes.append(atom_node(cond, len(nodes)))
+        return len(nodes) - 1
+    if isinstance(cond, And | Or):
+        node = _new(nodes, node_type=_N["AND" if isinstance(cond, And) else "OR"])
+        node.children = [_add_condition(nodes, c) for c in cond.operands]
+        return int(node.node_id)
+    if isinstance(cond, Not):
+        node = _new(nodes, node_type=_N["NOT"])
+        node.children = [_add_condition(nodes, cond.operand)]
+        return int(node.node_id)
+    if isinstance(cond, Imply):  # PlanSys2 has no imply node: (or (not a) b)
+        return _add_condition(nodes, Or((Not(cond.antecedent), cond.consequent)))
+    if isinstance(cond, Forall):  # nor forall: (not (exists (...) (not body)))
+        return _add_condition(nodes, Not(Exists(cond.variables, Not(cond.body))))
+    if isinstance(cond, Exists):
+        node = _new(
+            nodes,
+            node_type=_N["EXISTS"],
+            parameters=[param(v.name, v.types[0]) for v in cond.variables],
+        )
+        node.children = [_add_condition(nodes, cond.body)]
+        return int(node.node_id)
+    if isinstance(cond, Compare):
+        node = _new(nodes, node_type=_N["EXPRESSION"], expression_type=_N[_COMPARE[cond.op]])
+        node.children = [_add_expr(nodes, cond.left), _add_expr(nodes, cond.right)]
+        return int(node.node_id)
+    assert isinstance(cond, Equals)
+    node = _new(nodes, node_type=_N["EXPRESSION"], expression_type=_N["COMP_EQ"])
+    node.children = [
+        _new(nodes, node_type=_N["CONSTANT"], name=cond.left).node_id,
+        _new(nodes, node_type=_N["CONSTANT"], name=cond.right).node_id,
+    ]
+    return int(node.node_id)
+
+
+def _add_expr(nodes: list[Any], expr: NumExpr) -> int:
+    if isinstance(expr, Number):
+        return int(_new(nodes, node_type=_N["NUMBER"], value=float(expr.value)).node_id)
+    if isinstance(expr, FluentRef):
+        nodes.append(fluent_node(expr, len(nodes)))
+        return len(nodes) - 1
+    if isinstance(expr, Negate):
+        return _add_expr(nodes, BinaryOp("-", Number(0.0), expr.operand))
+    if isinstance(expr, DurationRef):
+        raise KnowledgeError("?duration cannot appear in a goal")
+    node = _new(nodes, node_type=_N["EXPRESSION"], expression_type=_N[_ARITH[expr.op]])
+    node.children = [_add_expr(nodes, expr.left), _add_expr(nodes, expr.right)]
+    return int(node.node_id)
