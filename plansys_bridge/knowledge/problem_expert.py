@@ -31,6 +31,12 @@ from plansys_bridge.hub.messages import Knowledge
 from plansys_bridge.knowledge.domain_expert import DomainExpert
 from plansys_bridge.knowledge.evaluation import Evaluator
 from plansys_bridge.knowledge.formulas import fluent_text
+from plansys_bridge.knowledge.inputs import (
+    check_atom,
+    check_condition,
+    check_fluent_value,
+    check_text,
+)
 from plansys_bridge.knowledge.journal import JournaledTable
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import (
@@ -349,7 +355,8 @@ class ProblemExpert:
 
     def _atom(self, fact: Atom | str, *, known_objects: bool = True) -> Atom:
         if isinstance(fact, Atom):
-            return fact
+            return check_atom(fact, "predicate")
+        check_text(fact, "a predicate")
         from plansys_bridge.pddl.parser import parse_atom
 
         objects = self.get_instances() if known_objects else None
@@ -357,14 +364,15 @@ class ProblemExpert:
 
     def _fluent_value(self, fv: FluentValue | str) -> FluentValue:
         if isinstance(fv, FluentValue):
-            return fv
+            return check_fluent_value(fv)
+        check_text(fv, "a function value")
         from plansys_bridge.pddl.parser import parse_fluent_value
 
         return parse_fluent_value(fv, self.domain, objects=self.get_instances())
 
     def _condition(self, cond: Condition | str) -> Condition:
         if not isinstance(cond, str):
-            return cond
+            return check_condition(cond)
         if not cond.strip():
             raise KnowledgeError("empty condition")
         from plansys_bridge.pddl.parser import parse_condition
@@ -375,7 +383,8 @@ class ProblemExpert:
 
     def add_instance(self, name: str, type: str) -> bool:
         """Add an object; False when it already exists with that type."""
-        obj, typ = name.strip().lower(), type.strip().lower()
+        obj = check_text(name, "an instance name").strip().lower()
+        typ = check_text(type, "an instance type").strip().lower()
         if not _NAME.match(obj):
             raise KnowledgeError(f"instance {name!r}: not a valid PDDL name")
         if not self.domain_expert.is_valid_type(typ):
@@ -490,7 +499,7 @@ class ProblemExpert:
             if self._fluents.get(key) == value.value:
                 return False
             self._fluents.set(key, float(value.value))
-            self._state = self._state.with_changes(fluents={key: value.value})
+            self._state = self._state.with_changes(fluents={key: float(value.value)})
             return True
 
     def get_function(
@@ -524,6 +533,9 @@ class ProblemExpert:
 
     @staticmethod
     def _fluent_key(name: str, args: tuple[str, ...] | list[str] | None) -> FluentKey:
+        check_text(name, "a function name")
+        if args is not None:
+            args = [check_text(a, "a function argument") for a in args]
         if args is None:
             words = name.replace("(", " ").replace(")", " ").split()
             if words[:1] == ["="]:
@@ -594,9 +606,9 @@ class ProblemExpert:
                     if not self.domain_expert.is_valid_type(typ):
                         raise KnowledgeError(f"instance {name}: unknown type {typ!r}")
                     self._put_instance(name, typ)
-                facts = [self._check_fact(atom) for atom in problem.init]
+                facts = [self._check_fact(check_atom(atom, "predicate")) for atom in problem.init]
                 values: dict[FluentKey, float] = {}
-                for fv in problem.init_fluents:
+                for fv in map(check_fluent_value, problem.init_fluents):
                     values[self._check_fluent(fv.fluent.name, fv.fluent.args)] = float(fv.value)
                 for atom in facts:
                     self._facts.set(atom, None)
