@@ -93,18 +93,26 @@ def make_clock(mission: MissionConfig) -> Clock:
     return WallClock(time_scale=mission.clock.time_scale)
 
 
-def make_transport(mission: MissionConfig) -> Transport:
-    """The hub transport the mission's ``transport:`` names (DDS imported only then)."""
+def make_transport(mission: MissionConfig, domain: Domain | None = None) -> Transport:
+    """The hub transport the mission's ``transport:`` names (DDS imported only then).
+
+    With ``domain``, a DDS transport drops received messages about actions the domain
+    does not have (:func:`~plansys_bridge.hub.dds_checks.domain_check`).
+    """
     if mission.transport.kind == "dds":
         try:
             from plansys_bridge.hub.dds import DdsTransport
+            from plansys_bridge.hub.dds_checks import domain_check
         except ImportError as exc:
             raise ConfigError(
                 f"the dds transport needs cyclonedds (pip install plansys-bridge[dds]): {exc}",
                 key="transport.kind",
                 file=mission.source,
             ) from exc
-        return DdsTransport(mission.transport.domain_id)
+        check = None
+        if domain is not None:
+            check = domain_check({a.name: len(a.parameters) for a in domain.actions})
+        return DdsTransport(mission.transport.domain_id, config=_dds_config(mission), check=check)
     return InProcessTransport()
 
 
@@ -121,6 +129,26 @@ def load_domain(mission: MissionConfig) -> Domain:
         i = next((i for i, p in enumerate(paths) if str(p) == cause.path), 0)
         key = "domain" if len(paths) == 1 else f"domain[{i}]"
         raise ConfigError(str(cause), key=key, file=mission.source) from exc
+
+
+def _dds_config(mission: MissionConfig) -> str:
+    """The Cyclone XML for the mission's ``transport:`` (loopback unless configured)."""
+    from plansys_bridge.hub.dds_config import network_config
+
+    t = mission.transport
+    if t.config is not None:
+        try:
+            return read_text(mission.resolve(t.config), "Cyclone DDS XML")
+        except PlansysBridgeError as exc:
+            raise ConfigError(str(exc), key="transport.config", file=mission.source) from exc
+    try:
+        return network_config(
+            t.domain_id, interfaces=t.interfaces, peers=t.peer_list(), multicast=t.multicast
+        )
+    except ConfigError as exc:
+        raise ConfigError(
+            str(exc).split(": ", 1)[-1], key=f"transport.{exc.key}", file=mission.source
+        ) from exc
 
 
 def build_knowledge(mission: MissionConfig, domain: Domain) -> ProblemExpert:
@@ -267,7 +295,7 @@ class MissionSession:
         self.mission = mission
         self.domain = domain
         self.knowledge = knowledge
-        self.hub = Hub(make_transport(mission), clock)
+        self.hub = Hub(make_transport(mission, domain), clock)
         self.local_performers = local_performers
         """False: the performers run in other processes (DDS); wait for their heartbeats."""
         self.out = out

@@ -10,6 +10,8 @@ Relative paths are resolved against the folder of the YAML file.
 
 from __future__ import annotations
 
+import contextlib
+import ipaddress
 from pathlib import Path
 from typing import Any, Literal
 
@@ -42,21 +44,52 @@ class ClockConfig(_Strict):
 
 
 class TransportConfig(_Strict):
-    """``inprocess``: one process; ``dds``: Cyclone DDS on loopback, so the performers
-    may run in other processes (``plansys-bridge performers MISSION.yaml``)."""
+    """``inprocess``: one process; ``dds``: Cyclone DDS, so the performers may run in
+    other processes (``plansys-bridge performers MISSION.yaml``) and on other hosts.
+
+    DDS stays on 127.0.0.1 unless told otherwise: ``interfaces`` (addresses or names)
+    and ``peers`` (hosts to discover by unicast) and ``multicast`` describe a real
+    network; ``config`` names a Cyclone XML file instead (what ``CYCLONEDDS_URI`` would
+    hold), for anything beyond that.
+    """
 
     kind: Literal["inprocess", "dds"] = "inprocess"
     domain_id: int = Field(0, ge=0, le=232)
     """DDS domain; processes of one mission share it, other runs pick another."""
     peer_timeout: float = Field(10.0, gt=0)
     """With remote performers: seconds to wait for a heartbeat from each of them."""
+    interfaces: list[str] = Field(default_factory=lambda: ["127.0.0.1"], min_length=1)
+    """Network interfaces DDS uses, by address or name (default: loopback only)."""
+    peers: list[str] | None = None
+    """Hosts (address or name, optionally ``:port``) found by unicast discovery; by
+    default the interfaces' own addresses, so processes of this machine meet."""
+    multicast: bool = False
+    """Discover and send by multicast on the interfaces (off: unicast to ``peers``)."""
+    config: str | None = None
+    """A Cyclone DDS XML file (relative to the mission file) used instead of the above."""
 
     @model_validator(mode="after")
     def _dds_settings_need_dds(self) -> TransportConfig:
-        extra = sorted(self.model_fields_set & {"domain_id", "peer_timeout"})
+        dds_only = {"domain_id", "peer_timeout", "interfaces", "peers", "multicast", "config"}
+        extra = sorted(self.model_fields_set & dds_only)
         if self.kind != "dds" and extra:
             raise ValueError(f"{', '.join(extra)} applies to the dds transport only")
+        network = sorted(self.model_fields_set & {"interfaces", "peers", "multicast"})
+        if self.config is not None and network:
+            raise ValueError(
+                f"config (a Cyclone XML file) replaces {', '.join(network)}: give one or the other"
+            )
         return self
+
+    def peer_list(self) -> list[str]:
+        """``peers``, or the interfaces that are addresses when ``peers`` is not given."""
+        if self.peers is not None:
+            return list(self.peers)
+        found = []
+        for value in self.interfaces:
+            with contextlib.suppress(ValueError):
+                found.append(str(ipaddress.ip_address(value)))
+        return found
 
 
 class KnowledgeConfig(_Strict):

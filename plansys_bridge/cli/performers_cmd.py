@@ -68,7 +68,7 @@ def handle(args: argparse.Namespace) -> int:
 async def _serve(mission: MissionConfig, clock: Clock, duration: float | None) -> None:
     domain = load_domain(mission)
     knowledge = build_knowledge(mission, domain)
-    hub = Hub(make_transport(mission), clock)
+    hub = Hub(make_transport(mission, domain), clock)
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     signals = (signal.SIGINT, signal.SIGTERM)

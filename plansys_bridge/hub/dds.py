@@ -57,6 +57,7 @@ from cyclonedds.util import duration
 
 from plansys_bridge.clock import VirtualTimeEventLoop
 from plansys_bridge.errors import HubError
+from plansys_bridge.hub.dds_checks import SampleCheck, check_sample
 from plansys_bridge.hub.dds_codec import ROUTES, Channel, Route, decode, encode
 from plansys_bridge.hub.dds_config import check_domain_id, loopback_config
 from plansys_bridge.hub.messages import Topics
@@ -167,9 +168,17 @@ class DdsTransport:
     every DDS entity.
     """
 
-    def __init__(self, domain_id: int = 0, *, config: str | None = None) -> None:
+    def __init__(
+        self,
+        domain_id: int = 0,
+        *,
+        config: str | None = None,
+        check: SampleCheck | None = None,
+    ) -> None:
         self.domain_id = check_domain_id(domain_id)
         self.config = config if config is not None else loopback_config(domain_id)
+        self._check: SampleCheck = check if check is not None else check_sample
+        """What a received message must pass (:mod:`~plansys_bridge.hub.dds_checks`)."""
         self._fanout = InProcessTransport()
         """Local fan-out to this process's subscribers, on the loop, in arrival order."""
         self._endpoints: list[_Endpoint] = []
@@ -380,10 +389,30 @@ class DdsTransport:
                 if skip_marked and self._from_project(ep, info.publication_handle):
                     continue
                 try:
-                    batch.append(decode(ep.channel, sample))
+                    msg = decode(ep.channel, sample)
+                    reason = self._check(ep.route.hub_topic, msg)
                 except (ValueError, TypeError) as exc:
-                    self.dropped += 1
-                    log.warning("%s: dropping a sample: %s", ep.channel.dds_topic, exc)
+                    reason = str(exc)
+                if reason is None:
+                    batch.append(msg)
+                    continue
+                self.dropped += 1
+                log.warning(
+                    "%s: dropped a sample from %s: %s",
+                    ep.channel.dds_topic,
+                    self._writer_name(ep, info.publication_handle),
+                    reason,
+                )
+
+    def _writer_name(self, ep: _Endpoint, handle: int) -> str:
+        """The writer as DDS knows it: its GUID and its participant's."""
+        try:
+            endpoint = ep.reader.get_matched_publication_data(handle)
+        except DDSException:
+            endpoint = None
+        if endpoint is None:
+            return f"writer {handle:#x} (already gone)"
+        return f"writer {endpoint.key} of participant {endpoint.participant_key}"
 
     def _from_project(self, ep: _Endpoint, handle: int) -> bool:
         """Whether the writer ``handle`` is a project writer (its message comes wrapped).

@@ -11,6 +11,7 @@ import os
 import random
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -20,7 +21,10 @@ import pytest
 
 pytest.importorskip("cyclonedds", reason="cyclonedds (extra 'dds') is not installed")
 
-from plansys2_peer import PlanSys2Performer, loopback_domain
+from cyclonedds.domain import DomainParticipant
+from cyclonedds.pub import DataWriter
+from cyclonedds.topic import Topic
+from plansys2_peer import ActionExecution_, PlanSys2Performer, loopback_domain
 
 from plansys_bridge.clock import WallClock
 from plansys_bridge.hub.auction import ActionClient
@@ -63,7 +67,28 @@ def peers(domain_id: int, *specs: tuple[str, str]) -> Iterator[list[PlanSys2Perf
         del domain
 
 
-def run_executor(mission: Path) -> dict[str, Any]:
+@contextlib.contextmanager
+def noise(domain_id: int) -> Iterator[None]:
+    """A foreign node writing a REQUEST for an action the domain lacks every 0.2 s."""
+    stop = threading.Event()
+    participant = DomainParticipant(domain_id)
+    writer = DataWriter(participant, Topic(participant, "rt/actions_hub", ActionExecution_))
+
+    def spam() -> None:
+        while not stop.wait(0.2):
+            writer.write(ActionExecution_(type=1, action="fly", arguments=["r1", "hall"]))
+
+    thread = threading.Thread(target=spam, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+        participant.__del__()
+
+
+def run_executor(mission: Path, stderr: list[str] | None = None) -> dict[str, Any]:
     """``plansys-bridge run MISSION --no-performers --json``: the executor process alone."""
     proc = subprocess.run(
         plansys_bridge("run", str(mission), "--no-performers", "--json"),
@@ -73,6 +98,8 @@ def run_executor(mission: Path) -> dict[str, Any]:
         env={**os.environ, "PYTHONUNBUFFERED": "1"},
     )
     assert proc.returncode == 0, proc.stdout + proc.stderr
+    if stderr is not None:
+        stderr.append(proc.stderr)
     report: dict[str, Any] = json.loads(proc.stdout[proc.stdout.index("{") :])
     return report
 
@@ -90,9 +117,13 @@ def test_two_plansys2_performers_do_every_action_of_the_dds_flat_mission(
 ) -> None:
     domain_id = random.SystemRandom().randint(1, 232)
     mission = mission_copy(tmp_path, domain_id)
-    with peers(domain_id, ("r1_base", "r1"), ("r2_base", "r2")) as (r1, r2):
-        report = run_executor(mission)
+    stderr: list[str] = []
+    with peers(domain_id, ("r1_base", "r1"), ("r2_base", "r2")) as (r1, r2), noise(domain_id):
+        report = run_executor(mission, stderr)
     assert report["success"], report
+    # A node writing nonsense all along was dropped, one line per sample, and changed nothing.
+    assert "rt/actions_hub: dropped a sample from writer " in stderr[0]
+    assert "unknown action 'fly'" in stderr[0]
     assert report["failures"] == 0
     r1_moves, r2_moves = moves_of(report, "r1"), moves_of(report, "r2")
     assert r1_moves and r2_moves
