@@ -19,14 +19,19 @@ from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
 if TYPE_CHECKING:
     from plansys_bridge.ros1.node import Node
 
-__all__ = ["SlaveServer"]
+__all__ = ["SlaveServer", "XmlRpcServer"]
 
 log = logging.getLogger(__name__)
 
 
-class _Server(socketserver.ThreadingMixIn, SimpleXMLRPCServer):
+class XmlRpcServer(socketserver.ThreadingMixIn, SimpleXMLRPCServer):
+    """One thread per request (a slow caller never blocks the others), no request log."""
+
     daemon_threads = True
     allow_reuse_address = True
+
+    def __init__(self, address: tuple[str, int]) -> None:
+        super().__init__(address, requestHandler=_Quiet, allow_none=True, logRequests=False)
 
 
 class _Quiet(SimpleXMLRPCRequestHandler):
@@ -39,7 +44,7 @@ class SlaveServer:
 
     def __init__(self, node: Node, bind: str) -> None:
         self.node = node
-        self._server = _Server((bind, 0), requestHandler=_Quiet, allow_none=True, logRequests=False)
+        self._server = XmlRpcServer((bind, 0))
         self.port: int = self._server.server_address[1]
         for name in (
             "getBusStats",

@@ -105,8 +105,14 @@ def start_peer(roscore: Roscore) -> Iterator[PeerStarter]:
     """``start_peer("talker.py", *args, core=...)``: a rospy peer, up ("ready"); all stop after."""
     started: list[Peer] = []
 
-    def start(script: str, *args: str, core: Roscore = roscore, ready: bool = True) -> Peer:
-        peer = Peer(script, list(args), core.env())
+    def start(
+        script: str,
+        *args: str,
+        core: Roscore = roscore,
+        env: dict[str, str] | None = None,
+        ready: bool = True,
+    ) -> Peer:
+        peer = Peer(script, list(args), env if env is not None else core.env())
         started.append(peer)
         if ready:
             peer.expect("ready")
