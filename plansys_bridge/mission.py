@@ -25,7 +25,7 @@ from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.messages import ActionStatus, Topics
 from plansys_bridge.hub.transport import InProcessTransport, Transport
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
-from plansys_bridge.mission_config import EventConfig, MissionConfig
+from plansys_bridge.mission_config import EventConfig, MissionConfig, make_planner
 from plansys_bridge.monitoring.progress import ProgressLines
 from plansys_bridge.monitoring.watch import MissionWatch
 from plansys_bridge.pddl.model import Domain
@@ -442,7 +442,7 @@ def run_mission(
             file=mission.source,
         )
     clock = make_clock(mission)
-    planner = planner or Planner()
+    planner = planner or make_planner(mission)
     if not local_performers and mission.transport.kind != "dds":
         raise ConfigError(
             "performers in other processes need transport: {kind: dds}",

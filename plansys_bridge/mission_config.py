@@ -18,8 +18,9 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from plansys_bridge.errors import ConfigError
+from plansys_bridge.errors import ConfigError, PluginError
 from plansys_bridge.execution.options import ExecutorOptions
+from plansys_bridge.planning.planner import Planner
 from plansys_bridge.textfile import TextFileError, read_text
 
 
@@ -92,6 +93,24 @@ class TransportConfig(_Strict):
         return found
 
 
+class PlannerConfig(_Strict):
+    """Which solver plans the mission, by name, and its options.
+
+    ``solver`` is a name from ``plansys-bridge plan --list-solvers`` (or a list, tried
+    in order); without one the planner picks the first installed solver that supports
+    the task. ``options`` maps a solver name to its options
+    (``{kairos: {improve_for: 5}}``) or gives an option to every listed solver that
+    takes it (``{threads: 1}``).
+    """
+
+    solver: str | list[str] | None = None
+    timeout: float = Field(30.0, gt=0)
+    """Seconds each planning (and replanning) may take."""
+    options: dict[str, Any] = Field(default_factory=dict)
+    fallback: bool = False
+    """A solver that errs or times out hands over to the next listed one."""
+
+
 class KnowledgeConfig(_Strict):
     """Initial knowledge given inline instead of (or on top of) a problem file."""
 
@@ -136,6 +155,7 @@ class MissionConfig(_Strict):
     goal: str | None = None
     performers: list[PerformerEntry] = Field(min_length=1)
     transport: TransportConfig = Field(default_factory=TransportConfig)
+    planner: PlannerConfig = Field(default_factory=PlannerConfig)
     clock: ClockConfig = Field(default_factory=ClockConfig)
     replanning: dict[str, Any] = Field(default_factory=dict)
     """``max_replans``; checked by :class:`ExecutorOptions`."""
@@ -200,6 +220,26 @@ class MissionConfig(_Strict):
             raise ConfigError(str(exc).split(": ", 1)[-1], key=exc.key, file=self.source) from exc
 
 
+def make_planner(mission: MissionConfig) -> Planner:
+    """The planner the ``planner:`` section asks for; errors name its keys."""
+    config = mission.planner
+    solvers = [config.solver] if isinstance(config.solver, str) else config.solver
+    try:
+        return Planner(
+            solvers=solvers,
+            timeout=config.timeout,
+            options=config.options,
+            fallback=config.fallback,
+        )
+    except PluginError as exc:
+        raise ConfigError(str(exc), key="planner.solver", file=mission.source) from exc
+    except ConfigError as exc:
+        key = exc.key or ""
+        key = f"options.{key.removeprefix('solvers.')}" if key.startswith("solvers") else key
+        message = str(exc).removeprefix(f"{exc.key}: ") if exc.key else str(exc)
+        raise ConfigError(message, key=f"planner.{key}".rstrip("."), file=mission.source) from exc
+
+
 def _key_path(loc: tuple[int | str, ...]) -> str:
     out = ""
     for part in loc:
@@ -258,6 +298,8 @@ def mission_from_dict(
         msg = msg.removeprefix("Value error, ")
         raise ConfigError(msg, key=_key_path(err["loc"]) or None, file=source) from exc
     mission.executor_options()  # the executor's own checks, errors naming the key
+    if mission.planner != PlannerConfig():
+        make_planner(mission)  # unknown solvers and options are errors now, not at planning
     if mission.bridge is not None:
         from plansys_bridge.bridge.config import parse_bridge_config
 
