@@ -18,6 +18,7 @@ from __future__ import annotations
 import asyncio
 import heapq
 import logging
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -136,6 +137,8 @@ class ActionRuntime:
     reason: str = ""
     start_delta: EffectDelta | None = None
     client: ActionClient | None = None
+    next_feedback_info: float = -math.inf
+    """Mission time before which a FEEDBACK updates the record without an info."""
 
     @property
     def text(self) -> str:
@@ -202,6 +205,7 @@ class PlanContext:
         self.unfinished = len(self.actions)
         self._deadlines: list[float] = []
         self._wake: Callable[[], None] = lambda: None
+        self._changed_steps: set[int] = set()
 
     # ------------------------------------------------------------ time and wake-ups
 
@@ -245,7 +249,13 @@ class PlanContext:
 
     # ------------------------------------------------------------ reporting
 
+    def take_changed_steps(self) -> set[int]:
+        """The steps whose status may have changed since the last call (for the DOT)."""
+        changed, self._changed_steps = self._changed_steps, set()
+        return changed
+
     def publish_info(self, rt: ActionRuntime) -> None:
+        self._changed_steps.add(rt.index)
         rec = rt.record
         info = ActionExecutionInfo(
             status=rec.status,
@@ -322,8 +332,14 @@ class PlanContext:
         rt.record.performer = node
 
     def feedback(self, rt: ActionRuntime, completion: float, status: str) -> None:
+        """Keep the performer's progress; publish it at most once per ``info_period``
+        per action (status changes always go out, carrying the latest progress)."""
         rt.record.completion = completion
         rt.record.message = status
+        now = self.now()
+        if now < rt.next_feedback_info:
+            return
+        rt.next_feedback_info = now + self.options.info_period
         self.publish_info(rt)
 
     def action_finished(self, rt: ActionRuntime, success: bool) -> None:

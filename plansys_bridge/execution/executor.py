@@ -49,7 +49,7 @@ from py_trees.common import Status
 
 from plansys_bridge.errors import ExecutionError, PlansysBridgeError
 from plansys_bridge.execution.behaviours import PlanContext
-from plansys_bridge.execution.dot import plan_graph_to_dot
+from plansys_bridge.execution.dot import IncrementalDot
 from plansys_bridge.execution.options import ExecutorOptions
 from plansys_bridge.execution.plan_graph import PlanGraph, build_plan_graph
 from plansys_bridge.execution.results import ExecutionResult
@@ -272,12 +272,17 @@ class Executor:
 
         ctx.bind_wake(event.set)
         unsubscribe = self.knowledge.subscribe(from_knowledge)
-        goal_atoms = self._goal_atoms(goal)
         clock = self.hub.clock
+        name = f"{ctx.plan_id}/{ctx.plan_index}"
+        dot = (
+            IncrementalDot(ctx.graph, self._goal_atoms(goal), name=name)
+            if self.options.publish_dot
+            else None
+        )
         try:
             last_dot = clock.now()
-            if self.options.publish_dot:
-                self._publish_dot(ctx, goal_atoms)
+            if dot is not None:
+                self._publish_dot(ctx, dot)
             while True:
                 event.clear()
                 if execution.cancelled and not ctx.cancelled:
@@ -285,10 +290,10 @@ class Executor:
                     root.stop(Status.INVALID)
                     break
                 self._tick(root, ctx)
-                if ctx.changed and self.options.publish_dot:
+                if ctx.changed and dot is not None:
                     due = last_dot + self.options.dot_period
                     if clock.now() >= due:
-                        self._publish_dot(ctx, goal_atoms)
+                        self._publish_dot(ctx, dot)
                         last_dot = clock.now()
                     else:
                         ctx.schedule(due)
@@ -315,8 +320,8 @@ class Executor:
         finally:
             unsubscribe()
             ctx.bind_wake(lambda: None)
-            if self.options.publish_dot and ctx.changed:
-                self._publish_dot(ctx, goal_atoms)
+            if dot is not None and ctx.changed:
+                self._publish_dot(ctx, dot)
         # every auction client ends before the plan does (a cancel completes quickly)
         for rt in ctx.actions:
             if rt.client is not None:
@@ -350,10 +355,8 @@ class Executor:
         positive, _negative = self.evaluator.condition_atoms(target, {}, self.knowledge.state())
         return sorted(positive, key=str)
 
-    def _publish_dot(self, ctx: PlanContext, goal_atoms: list[Atom]) -> None:
+    def _publish_dot(self, ctx: PlanContext, dot: IncrementalDot) -> None:
         ctx.changed = False
-        statuses = [rt.record.status for rt in ctx.actions]
-        text = plan_graph_to_dot(
-            ctx.graph, statuses, goal_atoms, name=f"{ctx.plan_id}/{ctx.plan_index}"
-        )
-        self.hub.publish(Topics.DOT_GRAPH, DotGraph(text, ctx.plan_id))
+        for index in ctx.take_changed_steps():
+            dot.set_status(index, ctx.actions[index].record.status)
+        self.hub.publish(Topics.DOT_GRAPH, DotGraph(dot.text(), ctx.plan_id))

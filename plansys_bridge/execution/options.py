@@ -40,11 +40,15 @@ class ExecutorOptions:
     * ``max_replans``: how many new plans may be requested after failures.
     * ``max_ticks_per_wake``: ticks in a row while something keeps changing (a
       guard against a template that changes state on every tick).
-    * ``publish_dot``: publish the coloured DOT graph on ``dot_graph`` after each
-      change (coalesced: at most once per wake-up).
+    * ``publish_dot``: publish the coloured DOT graph on ``dot_graph`` after
+      changes (coalesced: at most once per wake-up). The text is kept between
+      publications and only changed nodes are rewritten.
     * ``dot_period``: at most one DOT publication per this many mission seconds
-      (0: after every change). A 5,000-action graph takes ~10 ms to write, so
-      large plans want a period; the final state is always published.
+      (0: after every change, which costs a whole graph per event on large plans);
+      the final state is always published.
+    * ``info_period``: an action's FEEDBACK is published as
+      ``action_execution_info`` at most once per this many mission seconds (0:
+      every one); status changes are always published at once.
     * ``halt_on_failure``: after a failure, also halt the actions still running
       (PlanSys2's behaviour) instead of letting them finish first; replanning then
       starts at once, but their work so far is lost.
@@ -61,7 +65,8 @@ class ExecutorOptions:
     max_replans: int = 3
     max_ticks_per_wake: int = 1000
     publish_dot: bool = True
-    dot_period: float = 0.0
+    dot_period: float = 1.0
+    info_period: float = 0.5
     halt_on_failure: bool = False
     rollback_on_halt: bool = True
     action_template: ActionTemplate | None = None
@@ -73,6 +78,9 @@ class ExecutorOptions:
         if self.dot_period is None:
             raise ConfigError("must be a number >= 0", key="execution.dot_period")
         _optional_positive(self.dot_period, "execution.dot_period", allow_zero=True)
+        if self.info_period is None:
+            raise ConfigError("must be a number >= 0", key="execution.info_period")
+        _optional_positive(self.info_period, "execution.info_period", allow_zero=True)
         if isinstance(self.max_replans, bool) or not isinstance(self.max_replans, int):
             raise ConfigError(
                 f"must be an integer, got {self.max_replans!r}", key="replanning.max_replans"

@@ -769,7 +769,14 @@ def test_a_dead_performer_is_replaced_and_the_record_says_so(
 
 def test_dot_period_limits_dot_publications(simple: tuple[Domain, ProblemExpert]) -> None:
     domain, k = simple
-    every = run_scenario(domain, k, execute(SIMPLE_PLAN), SIMPLE_PERFORMERS, topics=ALL_TOPICS)
+    every = run_scenario(
+        domain,
+        k,
+        execute(SIMPLE_PLAN),
+        SIMPLE_PERFORMERS,
+        options=ExecutorOptions(dot_period=0.0),
+        topics=ALL_TOPICS,
+    )
     k2 = knowledge_from(
         domain,
         instances={"r2d2": "robot", "kitchen": "room", "hall": "room"},
