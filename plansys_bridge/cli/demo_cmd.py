@@ -10,7 +10,6 @@ import argparse
 from typing import Any
 
 from plansys_bridge.cli import run_cmd
-from plansys_bridge.mission import default_missions_dir
 
 DEMOS = {
     "cooking": "demo_cooking.yaml",
@@ -28,6 +27,8 @@ def register(sub: Any) -> None:
 
 def handle(args: argparse.Namespace) -> int:
     """Run the demo's mission file exactly as ``plansys-bridge run`` would."""
+    from plansys_bridge.mission import default_missions_dir
+
     argv = ["run", str(default_missions_dir() / DEMOS[args.name])]
     if args.clock:
         argv += ["--clock", args.clock]

@@ -5,12 +5,12 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from plansys_bridge.cli.options import check_at_least, check_non_negative, check_positive
-from plansys_bridge.execution.results import ExecutionResult
-from plansys_bridge.experiments.cooking import PAPER_EFFICIENCY, CookingConfig, run_cooking
-from plansys_bridge.performers.simulated import FaultPlan
+
+if TYPE_CHECKING:
+    from plansys_bridge.execution.results import ExecutionResult
 
 
 def register(sub: Any) -> None:
@@ -44,6 +44,10 @@ def handle(args: argparse.Namespace) -> int:
     check_positive(args.hours, "--hours")
     check_at_least(args.plans, 1, "--plans")
     check_non_negative(args.battery_drops, "--battery-drops")
+    # imported here: `--help` and the other commands never pay for the experiment
+    from plansys_bridge.experiments.cooking import PAPER_EFFICIENCY, CookingConfig, run_cooking
+    from plansys_bridge.performers.simulated import FaultPlan
+
     faults = FaultPlan()
     unresponsive = 0.0
     if args.faults:

@@ -10,25 +10,17 @@ started, then serves auctions until interrupted (Ctrl-C, SIGTERM) or ``--duratio
 from __future__ import annotations
 
 import argparse
-import asyncio
 import contextlib
 import signal
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from plansys_bridge.cli.options import check_positive
-from plansys_bridge.clock import Clock, run
 from plansys_bridge.errors import ConfigError
-from plansys_bridge.hub.hub import Hub
-from plansys_bridge.mission import (
-    build_knowledge,
-    in_mission_file,
-    load_domain,
-    make_clock,
-    make_transport,
-)
-from plansys_bridge.mission_config import MissionConfig, load_mission
-from plansys_bridge.performers.base import ActionPerformer, PerformerContext
-from plansys_bridge.performers.remote import serve_performers
+
+if TYPE_CHECKING:
+    from plansys_bridge.clock import Clock
+    from plansys_bridge.mission_config import MissionConfig
+    from plansys_bridge.performers.base import ActionPerformer
 
 
 def register(sub: Any) -> None:
@@ -47,6 +39,11 @@ def register(sub: Any) -> None:
 def handle(args: argparse.Namespace) -> int:
     check_positive(args.time_scale, "--time-scale")
     check_positive(args.duration, "--duration")
+    # imported here: `--help` and the other commands never pay for missions and DDS
+    from plansys_bridge.clock import run
+    from plansys_bridge.mission import in_mission_file, make_clock
+    from plansys_bridge.mission_config import load_mission
+
     mission = load_mission(args.mission)
     if mission.transport.kind != "dds":
         raise ConfigError(
@@ -66,6 +63,13 @@ def handle(args: argparse.Namespace) -> int:
 
 
 async def _serve(mission: MissionConfig, clock: Clock, duration: float | None) -> None:
+    import asyncio
+
+    from plansys_bridge.hub.hub import Hub
+    from plansys_bridge.mission import build_knowledge, load_domain, make_transport
+    from plansys_bridge.performers.base import PerformerContext
+    from plansys_bridge.performers.remote import serve_performers
+
     domain = load_domain(mission)
     knowledge = build_knowledge(mission, domain)
     hub = Hub(make_transport(mission, domain), clock)

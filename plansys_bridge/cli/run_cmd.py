@@ -4,16 +4,17 @@ from __future__ import annotations
 
 import argparse
 import json
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from plansys_bridge.cli.options import check_positive
 from plansys_bridge.cli.output import say
 from plansys_bridge.cli.verbosity import add_verbosity
 from plansys_bridge.errors import ConfigError
-from plansys_bridge.mission import MissionReport, run_mission
-from plansys_bridge.mission_config import load_mission
-from plansys_bridge.planning.plan import Plan, parse_plan
 from plansys_bridge.textfile import read_text
+
+if TYPE_CHECKING:
+    from plansys_bridge.mission import MissionReport
+    from plansys_bridge.planning.plan import Plan
 
 
 def register(sub: Any) -> None:
@@ -36,6 +37,11 @@ def register(sub: Any) -> None:
 
 def handle(args: argparse.Namespace) -> int:
     check_positive(args.time_scale, "--time-scale")
+    # imported here: `--help` and the other commands never pay for missions
+    from plansys_bridge.mission import run_mission
+    from plansys_bridge.mission_config import load_mission
+    from plansys_bridge.planning.plan import parse_plan
+
     mission = load_mission(args.mission)
     updates: dict[str, Any] = {}
     if args.clock or args.time_scale is not None:
