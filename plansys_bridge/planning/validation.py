@@ -132,6 +132,8 @@ class _Footprint:
     deletes: set[Atom]
     fluent_reads: set[FluentKey]
     fluent_writes: set[FluentKey]
+    fluent_additive: set[FluentKey] = field(default_factory=set)
+    """Written only by ``increase``/``decrease``: commutes with another such write."""
 
     def interferes(self, other: _Footprint) -> str | None:
         """The shared atom or fluent that makes the two interfere, or None."""
@@ -144,11 +146,15 @@ class _Footprint:
             common = mine & theirs
             if common:
                 return str(sorted(common, key=str)[0])
-        for fmine, ftheirs in (
-            (self.fluent_writes, other.fluent_reads | other.fluent_writes),
-            (other.fluent_writes, self.fluent_reads),
+        # PDDL 2.1 (Fox & Long 2003, section 8): a fluent one changes must not be read
+        # by the other (conditions, right-hand sides), and both may change it only if
+        # both do so additively (increase/decrease commute).
+        both_additive = self.fluent_additive & other.fluent_additive
+        for fcommon in (
+            self.fluent_writes & other.fluent_reads,
+            other.fluent_writes & self.fluent_reads,
+            (self.fluent_writes & other.fluent_writes) - both_additive,
         ):
-            fcommon = fmine & ftheirs
             if fcommon:
                 name, args = sorted(fcommon)[0]
                 return "(" + " ".join((name, *args)) + ")"
@@ -425,12 +431,14 @@ class _Validator:
         cond = h.condition
         pos, neg = self.ev.condition_atoms(cond, {}, state)
         adds, deletes, written = self.ev.effect_atoms(h.effect, {}, state)
+        effect_reads, additive = _numeric_accesses(self.ev, h.effect, state)
         return _Footprint(
             pos | neg,
             adds,
             deletes,
-            self.ev.condition_fluents(cond, {}, state) | _effect_reads(self.ev, h.effect, state),
+            self.ev.condition_fluents(cond, {}, state) | effect_reads,
             written,
+            additive & written,
         )
 
     def _goal(self, state: State) -> None:
@@ -450,11 +458,16 @@ class _Validator:
         )
 
 
-def _effect_reads(ev: Evaluator, effect: Effect, state: State) -> set[FluentKey]:
-    """Fluents an effect reads: values on the right of numeric effects, conditions of
-    ``when`` parts. (``forall`` bodies with free variables are left to the mutex check
-    on what they write.)"""
+def _numeric_accesses(
+    ev: Evaluator, effect: Effect, state: State
+) -> tuple[set[FluentKey], set[FluentKey]]:
+    """Fluents an effect reads (values on the right of numeric effects, conditions of
+    ``when`` parts) and those it changes only additively (``increase``/``decrease``
+    and no other kind of assignment). ``forall`` bodies with free variables are left
+    to the mutex check on what they write, which then counts as not additive."""
     reads: set[FluentKey] = set()
+    additive: set[FluentKey] = set()
+    other: set[FluentKey] = set()
 
     def visit(eff: Effect) -> None:
         if isinstance(eff, AndEffect):
@@ -469,9 +482,12 @@ def _effect_reads(ev: Evaluator, effect: Effect, state: State) -> set[FluentKey]
                 for ref in _fluent_refs(eff.value)
                 if not any(is_variable(a) for a in ref.args)
             )
+            if not any(is_variable(a) for a in eff.fluent.args):
+                key = (eff.fluent.name, eff.fluent.args)
+                (additive if eff.op in ("increase", "decrease") else other).add(key)
 
     visit(effect)
-    return reads
+    return reads, additive - other
 
 
 def _fluent_refs(expr: NumExpr) -> list[FluentRef]:
