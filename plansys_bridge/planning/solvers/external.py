@@ -69,6 +69,12 @@ def plan_from_lines(text: str, source: str) -> Plan:
         raise PlanFormatError(f"unreadable plan from {source}: {exc}") from exc
 
 
+_FOUND: dict[tuple[type, str], Path | None] = {}
+"""Where each solver class's program was found, per PATH: looking it up on every solve
+cost a directory scan per PATH entry (a solver installed while the process runs, in a
+folder already on PATH, is seen by the next process)."""
+
+
 class ExternalSolver(Solver):
     """A solver started as a program; subclasses give the command line and the reading."""
 
@@ -95,11 +101,14 @@ class ExternalSolver(Solver):
             shipped = _package_file(cls.bundled[0], *cls.bundled[1:])
             if shipped is not None:
                 return shipped
-        for name in cls.executables:
-            found = shutil.which(name)
-            if found:
-                return Path(found)
-        return None
+        key = (cls, os.environ.get("PATH", ""))
+        if key in _FOUND:
+            cached = _FOUND[key]
+            if cached is None or cached.is_file():
+                return cached
+        found = next((Path(f) for name in cls.executables if (f := shutil.which(name))), None)
+        _FOUND[key] = found
+        return found
 
     @classmethod
     def unavailable_reason(cls) -> str | None:
