@@ -161,6 +161,24 @@ class _Footprint:
         return None
 
 
+class _Prints:
+    """The footprints of one group of simultaneous happenings, worked out on first use:
+    only simultaneous steps and happenings closer than epsilon are compared, and
+    computing every footprint was most of a validation's time."""
+
+    def __init__(self, validator: _Validator, group: list[_Happening], state: State) -> None:
+        self._validator = validator
+        self._group = group
+        self._state = state
+        self._prints: list[tuple[_Happening, _Footprint]] | None = None
+
+    def get(self) -> list[tuple[_Happening, _Footprint]]:
+        if self._prints is None:
+            footprint = self._validator._footprint
+            self._prints = [(h, footprint(h, self._state)) for h in self._group]
+        return self._prints
+
+
 class _Invalid(Exception):
     def __init__(self, report: ValidationReport) -> None:
         self.report = report
@@ -232,7 +250,7 @@ class _Validator:
         happenings = self._happenings()
         state = self.state
         open_steps: dict[int, _Happening] = {}
-        recent: list[tuple[float, list[tuple[_Happening, _Footprint]]]] = []
+        recent: list[tuple[float, _Prints]] = []
         position = 0
         while position < len(happenings):
             group = [happenings[position]]
@@ -278,21 +296,22 @@ class _Validator:
         group: list[_Happening],
         state: State,
         open_steps: dict[int, _Happening],
-        recent: list[tuple[float, list[tuple[_Happening, _Footprint]]]],
+        recent: list[tuple[float, _Prints]],
     ) -> State:
         now = group[0].time
-        prints = [(h, self._footprint(h, state)) for h in group]
+        prints = _Prints(self, group, state)
         for h in group:
             if h.point == "start":
                 self._check_duration(h, state)
             try:
                 self._check(h, h.condition, h.when, state)
             except _Invalid as exc:
-                raise self._explain_simultaneous(exc, h, prints) from None
-        for a in range(len(prints)):
-            for b in range(a + 1, len(prints)):
-                ha, fa = prints[a]
-                hb, fb = prints[b]
+                raise self._explain_simultaneous(exc, h, prints.get()) from None
+        pairs = prints.get() if len({h.index for h in group}) > 1 else []
+        for a in range(len(pairs)):
+            for b in range(a + 1, len(pairs)):
+                ha, fa = pairs[a]
+                hb, fb = pairs[b]
                 if ha.index == hb.index:
                     continue
                 shared = fa.interferes(fb)
@@ -347,14 +366,14 @@ class _Validator:
     def _check_separation(
         self,
         now: float,
-        prints: list[tuple[_Happening, _Footprint]],
-        recent: list[tuple[float, list[tuple[_Happening, _Footprint]]]],
+        prints: _Prints,
+        recent: list[tuple[float, _Prints]],
     ) -> None:
         """Interfering happenings must be at least ``epsilon`` apart."""
         recent[:] = [(t, p) for t, p in recent if now - t < self.epsilon - _SLACK]
         for then, earlier in recent:
-            for ha, fa in earlier:
-                for hb, fb in prints:
+            for ha, fa in earlier.get():
+                for hb, fb in prints.get():
                     if ha.index == hb.index:
                         continue
                     shared = fa.interferes(fb)
