@@ -94,7 +94,9 @@ class PoseSample:
 
     ``bag_time_ns`` is the bag's record time (what replay timing follows);
     ``stamp`` is the message header stamp in seconds (the robot's clock then).
-    ``cdr`` holds the message as ROS 2 CDR bytes of type ``msgtype``.
+    ``wire`` holds the message as read: ROS 2 CDR bytes of type ``msgtype``, or with
+    ``wire_ros1`` its ROS 1 serialisation; :attr:`cdr` gives the CDR bytes either way
+    (a ROS 1 message is converted when they are first asked for, not while reading).
     """
 
     bag_time_ns: int
@@ -108,7 +110,19 @@ class PoseSample:
     qz: float
     qw: float
     msgtype: str
-    cdr: bytes
+    wire: bytes
+    wire_ros1: bool = False
+
+    @property
+    def cdr(self) -> bytes:
+        """The message as ROS 2 CDR bytes (to write to a ROS 2 bag or re-publish)."""
+        if not self.wire_ros1:
+            return self.wire
+        cached: bytes | None = self.__dict__.get("_cdr")
+        if cached is None:
+            cached = bytes(ros2_typestore().ros1_to_cdr(self.wire, self.msgtype))
+            object.__setattr__(self, "_cdr", cached)
+        return cached
 
     @property
     def yaw(self) -> float:
@@ -129,14 +143,20 @@ class RawMessage:
     cdr: bytes
 
 
-def pose_from_message(msg: Any, msgtype: str, bag_time_ns: int, cdr: bytes) -> PoseSample:
+def pose_from_message(
+    msg: Any, msgtype: str, bag_time_ns: int, wire: bytes, wire_ros1: bool = False
+) -> PoseSample:
     """Extract the pose of an Odometry / PoseStamped / PoseWithCovarianceStamped."""
     pose = msg.pose if msgtype == POSE_STAMPED else msg.pose.pose
-    stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+    stamp = msg.header.stamp
     p, q = pose.position, pose.orientation
-    return PoseSample(
+    # Filled in directly rather than through the frozen dataclass's __init__ (one
+    # object.__setattr__ per field): a bag is read at tens of thousands of poses per
+    # second, and this was a good part of the cost of each.
+    sample = object.__new__(PoseSample)
+    sample.__dict__.update(
         bag_time_ns=bag_time_ns,
-        stamp=stamp,
+        stamp=stamp.sec + stamp.nanosec * 1e-9,
         frame_id=msg.header.frame_id,
         x=float(p.x),
         y=float(p.y),
@@ -146,8 +166,10 @@ def pose_from_message(msg: Any, msgtype: str, bag_time_ns: int, cdr: bytes) -> P
         qz=float(q.z),
         qw=float(q.w),
         msgtype=msgtype,
-        cdr=cdr,
+        wire=wire,
+        wire_ros1=wire_ros1,
     )
+    return sample
 
 
 class BagReader:
@@ -256,8 +278,30 @@ class BagReader:
         for topic in names:
             types[topic] = self.ros2_msgtype(topic)
             conns.extend(self._connections(topic))
-        where = names[0] if len(names) == 1 else ", ".join(names)
         ros1 = self.is_ros1
+        for conn, timestamp, raw in self._raw(names, conns, start_ns, stop_ns):
+            msgtype = types[conn.topic]
+            try:
+                cdr = bytes(store.ros1_to_cdr(raw, msgtype)) if ros1 else bytes(raw)
+            except _READ_ERRORS as exc:
+                raise BagCorruptError(
+                    f"message cannot be decoded as {msgtype}: {exc}",
+                    self.path,
+                    conn.topic,
+                    timestamp,
+                ) from exc
+            yield RawMessage(conn.topic, msgtype, timestamp, cdr)
+
+    def _raw(
+        self,
+        names: Sequence[str],
+        conns: list[Connection],
+        start_ns: int | None,
+        stop_ns: int | None,
+    ) -> Iterator[tuple[Connection, int, bytes]]:
+        """The bag's messages as stored; a damaged bag is a BagCorruptError naming the
+        last good message."""
+        where = names[0] if len(names) == 1 else ", ".join(names)
         last: int | None = None
         it = self.reader.messages(conns, start=start_ns, stop=stop_ns)
         while True:
@@ -272,18 +316,8 @@ class BagReader:
                     where,
                     last,
                 ) from exc
-            msgtype = types[conn.topic]
-            try:
-                cdr = bytes(store.ros1_to_cdr(raw, msgtype)) if ros1 else bytes(raw)
-            except _READ_ERRORS as exc:
-                raise BagCorruptError(
-                    f"message cannot be decoded as {msgtype}: {exc}",
-                    self.path,
-                    conn.topic,
-                    timestamp,
-                ) from exc
             last = timestamp
-            yield RawMessage(conn.topic, msgtype, timestamp, cdr)
+            yield conn, timestamp, raw
 
     def ros2_msgtype(self, topic: str) -> str:
         """The topic's ROS 2 type; BagTypeError if its messages cannot be given as one.
@@ -327,18 +361,24 @@ class BagReader:
                 self.path,
                 topic,
             )
-        store = ros2_typestore()
-        for raw in self.messages(topic, start_ns, stop_ns):
+        self.ros2_msgtype(topic)  # convertible to ROS 2, or BagTypeError now
+        ros1 = self.is_ros1
+        # A ROS 1 message is decoded straight from its own serialisation (as rosbags'
+        # AnyReader does); its CDR bytes are made only if someone asks for them.
+        store = self.reader.typestore if ros1 else ros2_typestore()
+        decode = store.deserialize_ros1 if ros1 else store.deserialize_cdr
+        conns = self._connections(topic)
+        for _conn, timestamp, raw in self._raw([topic], conns, start_ns, stop_ns):
             try:
-                msg = store.deserialize_cdr(raw.cdr, msgtype)
+                msg = decode(raw, msgtype)
             except _READ_ERRORS as exc:
                 raise BagCorruptError(
                     f"message cannot be decoded as {msgtype}: {exc}",
                     self.path,
                     topic,
-                    raw.bag_time_ns,
+                    timestamp,
                 ) from exc
-            yield pose_from_message(msg, msgtype, raw.bag_time_ns, raw.cdr)
+            yield pose_from_message(msg, msgtype, timestamp, bytes(raw), ros1)
 
 
 def read_poses(
