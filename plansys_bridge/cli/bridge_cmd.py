@@ -7,7 +7,6 @@ SIGTERM or ``--duration``), how many messages crossed on each.
 from __future__ import annotations
 
 import argparse
-import asyncio
 import contextlib
 from typing import Any
 
@@ -25,6 +24,8 @@ def register(sub: Any) -> None:
 
 def handle(args: argparse.Namespace) -> int:
     check_positive(args.duration, "--duration")
+    import asyncio  # here: `--help` never loads the event loop machinery
+
     from plansys_bridge.bridge.config import load_bridge_config
 
     config = load_bridge_config(args.config)
@@ -33,6 +34,8 @@ def handle(args: argparse.Namespace) -> int:
 
 
 async def _run(config: Any, duration: float | None) -> None:
+    import asyncio
+
     from plansys_bridge.bridge.bridge import Bridge
 
     async with Bridge(config) as bridge:
