@@ -88,7 +88,7 @@ def yaw_from_quaternion(qx: float, qy: float, qz: float, qw: float) -> float:
     return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PoseSample:
     """One pose read from a bag.
 
@@ -123,6 +123,30 @@ class PoseSample:
             cached = bytes(ros2_typestore().ros1_to_cdr(self.wire, self.msgtype))
             object.__setattr__(self, "_cdr", cached)
         return cached
+
+    def __eq__(self, other: object) -> bool:
+        """Same pose and the same message (CDR bytes), however each was read."""
+        if not isinstance(other, PoseSample):
+            return NotImplemented
+        return self._key() == other._key() and self.cdr == other.cdr
+
+    def __hash__(self) -> int:
+        return hash(self._key())
+
+    def _key(self) -> tuple[object, ...]:
+        return (
+            self.bag_time_ns,
+            self.stamp,
+            self.frame_id,
+            self.x,
+            self.y,
+            self.z,
+            self.qx,
+            self.qy,
+            self.qz,
+            self.qw,
+            self.msgtype,
+        )
 
     @property
     def yaw(self) -> float:
