@@ -61,6 +61,11 @@ def register(subparsers: Any) -> None:
         "--no-validate", action="store_true", help="do not check the plan before printing it"
     )
     parser.add_argument(
+        "--eliminate",
+        action="store_true",
+        help="drop the steps nothing needs (greedy action elimination, re-validated)",
+    )
+    parser.add_argument(
         "--list-solvers", action="store_true", help="list solvers, availability and features"
     )
     parser.set_defaults(func=run)
@@ -99,6 +104,7 @@ def run(args: argparse.Namespace) -> int:
             options=options,
             fallback=args.fallback,
             validate=not args.no_validate,
+            eliminate=args.eliminate,
         )
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)

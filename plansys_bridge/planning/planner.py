@@ -40,6 +40,7 @@ class Planner:
         *,
         fallback: bool = False,
         validate: bool = False,
+        eliminate: bool = False,
     ) -> None:
         if isinstance(solvers, str):
             solvers = [solvers]
@@ -48,6 +49,9 @@ class Planner:
         self.timeout = float(timeout)
         self.fallback = fallback
         self.validate = validate
+        self.eliminate = eliminate
+        """With ``validate``: drop the steps nothing needs (greedy action elimination,
+        :mod:`plansys_bridge.planning.elimination`); costs a validation per step."""
         names = list(solvers) if solvers else list(DEFAULT_ORDER)
         if not names:
             raise ConfigError("no solver configured", key="solvers")
@@ -126,14 +130,23 @@ class Planner:
     def _validated(
         self, result: PlanResult, solver: Solver, domain: Domain, problem: Problem
     ) -> PlanResult:
+        from plansys_bridge.planning.elimination import eliminate_redundant_steps
         from plansys_bridge.planning.validation import validate_plan
 
         assert result.plan is not None
         report = validate_plan(domain, problem, result.plan, epsilon=solver.epsilon)
         if report.valid:
-            return PlanResult(
-                result.status, result.plan, result.solver, result.message, result.elapsed_s, report
+            plan, message = result.plan, result.message
+            pruned = (
+                eliminate_redundant_steps(domain, problem, plan, epsilon=solver.epsilon)
+                if self.eliminate
+                else None
             )
+            if pruned is not None and pruned.removed:
+                plan = pruned.plan
+                message = f"{message}; {pruned.message}" if message else pruned.message
+                report = validate_plan(domain, problem, plan, epsilon=solver.epsilon)
+            return PlanResult(result.status, plan, result.solver, message, result.elapsed_s, report)
         return PlanResult(
             PlanStatus.ERROR,
             result.plan,
