@@ -79,7 +79,6 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     from plansys_bridge.pddl.parser import parse_domain_files, parse_problem
     from plansys_bridge.planning.planner import Planner
-    from plansys_bridge.planning.schedule import reschedule_report
 
     *domain_files, problem_file = args.files
     domain = parse_domain_files(domain_files)
@@ -124,6 +123,9 @@ def run(args: argparse.Namespace) -> int:
     if result.validation is not None:
         notes.append(f"; {result.validation.message}")
     if args.reschedule:
+        # only here: the plan graph brings networkx, a third of a plain run's start-up
+        from plansys_bridge.planning.schedule import reschedule_report
+
         rescheduled = reschedule_report(plan, domain, problem)
         plan = rescheduled.plan
         notes.append(
