@@ -35,6 +35,7 @@ from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, TypesysError, get_typestore
 
 from .errors import BagCorruptError, BagError, BagTopicError, BagTypeError
+from .ros1_pose import ros1_pose
 
 try:  # rosbags decompresses mcap chunks with zstd (backport before Python 3.14)
     from compression.zstd import ZstdError  # type: ignore[import-not-found,unused-ignore]
@@ -386,15 +387,14 @@ class BagReader:
                 topic,
             )
         self.ros2_msgtype(topic)  # convertible to ROS 2, or BagTypeError now
-        ros1 = self.is_ros1
-        # A ROS 1 message is decoded straight from its own serialisation (as rosbags'
-        # AnyReader does); its CDR bytes are made only if someone asks for them.
-        store = self.reader.typestore if ros1 else ros2_typestore()
-        decode = store.deserialize_ros1 if ros1 else store.deserialize_cdr
         conns = self._connections(topic)
+        if self.is_ros1:
+            yield from self._ros1_poses(topic, msgtype, conns, start_ns, stop_ns)
+            return
+        store = ros2_typestore()
         for _conn, timestamp, raw in self._raw([topic], conns, start_ns, stop_ns):
             try:
-                msg = decode(raw, msgtype)
+                msg = store.deserialize_cdr(raw, msgtype)
             except _READ_ERRORS as exc:
                 raise BagCorruptError(
                     f"message cannot be decoded as {msgtype}: {exc}",
@@ -402,7 +402,46 @@ class BagReader:
                     topic,
                     timestamp,
                 ) from exc
-            yield pose_from_message(msg, msgtype, timestamp, bytes(raw), ros1)
+            yield pose_from_message(msg, msgtype, timestamp, bytes(raw))
+
+    def _ros1_poses(
+        self,
+        topic: str,
+        msgtype: str,
+        conns: list[Connection],
+        start_ns: int | None,
+        stop_ns: int | None,
+    ) -> Iterator[PoseSample]:
+        """ROS 1 poses read from the front of each message (:mod:`.ros1_pose`); the
+        CDR bytes are made only if someone asks for them."""
+        odometry = msgtype == ODOMETRY
+        for _conn, timestamp, raw in self._raw([topic], conns, start_ns, stop_ns):
+            try:
+                stamp, frame_id, (x, y, z, qx, qy, qz, qw) = ros1_pose(raw, odometry)
+            except (struct.error, UnicodeDecodeError) as exc:
+                raise BagCorruptError(
+                    f"message cannot be decoded as {msgtype}: {exc}",
+                    self.path,
+                    topic,
+                    timestamp,
+                ) from exc
+            sample = object.__new__(PoseSample)  # see pose_from_message
+            sample.__dict__.update(
+                bag_time_ns=timestamp,
+                stamp=stamp,
+                frame_id=frame_id,
+                x=x,
+                y=y,
+                z=z,
+                qx=qx,
+                qy=qy,
+                qz=qz,
+                qw=qw,
+                msgtype=msgtype,
+                wire=bytes(raw),
+                wire_ros1=True,
+            )
+            yield sample
 
 
 def read_poses(

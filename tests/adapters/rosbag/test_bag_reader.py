@@ -291,3 +291,40 @@ def test_ros2_sqlite3_bags(demo_bags: Path, tmp_path: Path, bare_file: bool) -> 
     expected = list(read_poses(demo_bags / "kitchen_nav", "/amcl_pose"))
     assert list(read_poses(target, "/amcl_pose")) == expected
     assert len(expected) == 149
+
+
+def test_ros1_poses_read_from_the_front_equal_the_fully_decoded_message() -> None:
+    """ROS 1 poses are read without decoding the whole message: same stamp, frame,
+    pose and CDR bytes as rosbags' full decoding gives."""
+    from plansys_bridge_adapters.rosbag.reader import pose_from_message, ros2_typestore
+
+    repo = Path(__file__).resolve().parents[3]
+    for path, topic in (
+        (repo / "bags" / "kitchen_nav_ros1.bag", "/robot_pose"),
+        (repo / "tests" / "fixtures" / "bags" / "rl_test1.bag", "/husky_velocity_controller/odom"),
+    ):
+        if not path.is_file():
+            continue
+        with BagReader(path) as bag:
+            poses = list(bag.poses(topic))
+            raws = list(bag.messages(topic))
+        assert len(poses) == len(raws) > 0
+        store = ros2_typestore()
+        for sample, raw in zip(poses[:300], raws[:300], strict=False):
+            full = pose_from_message(
+                store.deserialize_cdr(raw.cdr, raw.msgtype), raw.msgtype, raw.bag_time_ns, raw.cdr
+            )
+            assert sample == full
+            assert sample.cdr == raw.cdr
+
+
+def test_a_truncated_ros1_pose_is_a_corrupt_bag_error() -> None:
+    from plansys_bridge_adapters.rosbag.ros1_pose import ros1_pose
+
+    header = struct.pack("<III", 7, 100, 500) + struct.pack("<I", 3) + b"map"
+    pose = struct.pack("<7d", 1, 2, 3, 0, 0, 0, 1)
+    assert ros1_pose(header + pose, odometry=False) == (100.0000005, "map", (1, 2, 3, 0, 0, 0, 1))
+    with pytest.raises(struct.error):
+        ros1_pose(header + pose[:20], odometry=False)
+    with pytest.raises(struct.error):
+        ros1_pose(header[:14], odometry=False)
