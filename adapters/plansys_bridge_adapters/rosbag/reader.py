@@ -309,13 +309,15 @@ class BagReader:
             try:
                 cdr = bytes(store.ros1_to_cdr(raw, msgtype)) if ros1 else bytes(raw)
             except _READ_ERRORS as exc:
-                raise BagCorruptError(
-                    f"message cannot be decoded as {msgtype}: {exc}",
-                    self.path,
-                    conn.topic,
-                    timestamp,
-                ) from exc
+                raise self._undecodable(msgtype, conn.topic, timestamp, exc) from exc
             yield RawMessage(conn.topic, msgtype, timestamp, cdr)
+
+    def _undecodable(
+        self, msgtype: str, topic: str, timestamp: int, exc: BaseException
+    ) -> BagCorruptError:
+        return BagCorruptError(
+            f"message cannot be decoded as {msgtype}: {exc}", self.path, topic, timestamp
+        )
 
     def _raw(
         self,
@@ -396,12 +398,7 @@ class BagReader:
             try:
                 msg = store.deserialize_cdr(raw, msgtype)
             except _READ_ERRORS as exc:
-                raise BagCorruptError(
-                    f"message cannot be decoded as {msgtype}: {exc}",
-                    self.path,
-                    topic,
-                    timestamp,
-                ) from exc
+                raise self._undecodable(msgtype, topic, timestamp, exc) from exc
             yield pose_from_message(msg, msgtype, timestamp, bytes(raw))
 
     def _ros1_poses(
@@ -419,12 +416,7 @@ class BagReader:
             try:
                 stamp, frame_id, (x, y, z, qx, qy, qz, qw) = ros1_pose(raw, odometry)
             except (struct.error, UnicodeDecodeError) as exc:
-                raise BagCorruptError(
-                    f"message cannot be decoded as {msgtype}: {exc}",
-                    self.path,
-                    topic,
-                    timestamp,
-                ) from exc
+                raise self._undecodable(msgtype, topic, timestamp, exc) from exc
             sample = object.__new__(PoseSample)  # see pose_from_message
             sample.__dict__.update(
                 bag_time_ns=timestamp,
