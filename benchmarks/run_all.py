@@ -102,6 +102,12 @@ BENCHES = (
     Bench("mavlink", "bench_mavlink.py", (), "MAVLink adapter against the vehicle double"),
     Bench("can", "bench_can.py", (), "CAN adapter on python-can's virtual bus"),
     Bench("bag_replay", "bench_bag_replay.py", (), "ROS bag reading and replay"),
+    Bench(
+        "ros1",
+        "bench_ros1.py",
+        ("--latency-n", "200", "--burst-n", "1000"),
+        "TCPROS vs rospy against a real roscore; latency the bridge adds",
+    ),
 )
 
 
