@@ -26,6 +26,7 @@ from plansys_bridge.hub.messages import ActionStatus, Topics
 from plansys_bridge.hub.transport import InProcessTransport, Transport
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.mission_config import EventConfig, MissionConfig, make_planner
+from plansys_bridge.monitoring.live import make_live_view
 from plansys_bridge.monitoring.progress import ProgressLines
 from plansys_bridge.monitoring.watch import MissionWatch
 from plansys_bridge.pddl.model import Domain
@@ -66,6 +67,8 @@ class MissionReport:
     result: ExecutionResult | None
     planning_s: float = 0.0
     events_applied: list[str] = field(default_factory=list)
+    watch: MissionWatch | None = None
+    """What went over the hub during the execution (for pictures, ``--report``)."""
 
     def summary(self) -> str:
         r = self.result
@@ -427,11 +430,14 @@ def run_mission(
     planner: Planner | None = None,
     plan: Plan | None = None,
     local_performers: bool = True,
+    live: bool = False,
 ) -> MissionReport:
     """Run ``mission`` to its end on the clock it names; prints progress to ``out``.
 
     ``local_performers=False`` runs the executor only: the performers are served by
     ``plansys-bridge performers`` in other processes over the DDS transport.
+    ``live=True`` shows progress as a table redrawn in place (rich, for a terminal)
+    instead of one line per change.
     """
     domain = load_domain(mission)
     knowledge = build_knowledge(mission, domain)
@@ -449,7 +455,9 @@ def run_mission(
             key="transport.kind",
             file=mission.source,
         )
-    return run(_run(mission, domain, knowledge, clock, planner, plan, out, local_performers), clock)
+    return run(
+        _run(mission, domain, knowledge, clock, planner, plan, out, local_performers, live), clock
+    )
 
 
 async def _run(
@@ -461,6 +469,7 @@ async def _run(
     plan: Plan | None,
     out: Printer | None,
     local_performers: bool = True,
+    live: bool = False,
 ) -> MissionReport:
     t0 = clock.now()
 
@@ -509,12 +518,18 @@ async def _run(
                 session.events_applied,
             )
         executor = Executor(session.hub, domain, knowledge, planner, mission.executor_options())
-        watch = MissionWatch(clock.now, ProgressLines(say, elapsed)).attach(session.hub)
+        view = make_live_view(elapsed, mission.name) if live and out is not None else None
+        listener = view if view is not None else ProgressLines(say, elapsed)
+        watch = MissionWatch(clock.now, listener).attach(session.hub)
         execute = executor.execute(plan, goal=knowledge.get_goal())
         try:
-            result = await (
-                asyncio.wait_for(execute, mission.timeout) if mission.timeout else execute
-            )
+            with view if view is not None else contextlib.nullcontext():
+                if view is not None:
+                    view.bind(watch)
+                result = await (
+                    asyncio.wait_for(execute, mission.timeout) if mission.timeout else execute
+                )
+                await _heard_the_end(watch, result)
         except TimeoutError:
             watch.close()
             return MissionReport(
@@ -525,8 +540,8 @@ async def _run(
                 None,
                 planning_s,
                 session.events_applied,
+                watch,
             )
-        await _heard_the_end(watch, result)
         watch.close()
         return MissionReport(
             mission.name,
@@ -536,6 +551,7 @@ async def _run(
             result,
             planning_s,
             list(session.events_applied),
+            watch,
         )
 
 

@@ -17,7 +17,18 @@ from plansys_bridge.cli.signals import sigterm_interrupts
 from plansys_bridge.cli.verbosity import add_verbosity, configure_logging
 from plansys_bridge.errors import PlansysBridgeError
 
-SUBCOMMANDS = ("validate", "plan", "run", "experiment", "terminal", "demo", "performers", "bridge")
+SUBCOMMANDS = (
+    "validate",
+    "plan",
+    "run",
+    "experiment",
+    "terminal",
+    "demo",
+    "performers",
+    "bridge",
+    "report",
+    "monitor",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

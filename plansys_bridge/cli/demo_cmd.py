@@ -22,6 +22,7 @@ def register(sub: Any) -> None:
     p.add_argument("--clock", choices=("wall", "virtual"), help="override the demo's clock")
     p.add_argument("--time-scale", type=float, help="override the wall clock's time scale")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    run_cmd.add_report_option(p)
     p.set_defaults(func=handle)
 
 
@@ -36,6 +37,8 @@ def handle(args: argparse.Namespace) -> int:
         argv += ["--time-scale", str(args.time_scale)]
     if args.json:
         argv.append("--json")
+    if args.report:
+        argv += ["--report", args.report]
     if getattr(args, "quiet", False):
         argv.append("--quiet")
     argv += ["--verbose"] * int(getattr(args, "verbose", 0) or 0)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from typing import TYPE_CHECKING, Any
 
 from plansys_bridge.cli.options import check_positive
@@ -31,6 +32,7 @@ def register(sub: Any) -> None:
         "(`plansys-bridge performers`, needs transport: {kind: dds})",
     )
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    add_report_option(p)
     add_verbosity(p)
     p.set_defaults(func=handle)
 
@@ -71,12 +73,45 @@ def handle(args: argparse.Namespace) -> int:
         out=None if quiet else say,
         plan=plan,
         local_performers=not args.no_performers,
+        live=not quiet and sys.stdout.isatty(),
     )
     if args.json:
         say(json.dumps(report_json(report), indent=2))
     else:
         say(report.summary())
+    if getattr(args, "report", None):
+        for path in write_run_report(report, args.report):
+            if not quiet:
+                say(f"wrote {path}")
     return 0 if report.success else 1
+
+
+def add_report_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--report",
+        metavar="DIR",
+        help="write gantt.svg/.png, plan_graph.dot/.svg and summary.json into DIR",
+    )
+
+
+def write_run_report(report: MissionReport, folder: str) -> list[Any]:
+    """The report files of a run just finished (see :mod:`plansys_bridge.report`)."""
+    from plansys_bridge.report.model import RunReport
+    from plansys_bridge.report.write import write_report
+
+    if report.watch is None:  # it never started executing (no plan): nothing to draw
+        return []
+    r = report.result
+    run = RunReport.from_watch(
+        report.watch,
+        name=report.name,
+        status=report.status,
+        success=report.success,
+        message=report.message,
+        started=r.started if r is not None else 0.0,
+        finished=r.finished if r is not None else None,
+    )
+    return write_report(run, folder)
 
 
 def report_json(report: MissionReport) -> dict[str, Any]:

@@ -9,7 +9,8 @@ only reachable that way). :class:`MissionWatch` turns messages into that view:
 * ``action_execution_info``: an action's status, completion and message;
 * ``actions_hub``: RESPONSEs (bids) and the CONFIRM naming the auction's winner;
 * ``performers_status``: heartbeats (state, action served, when last seen);
-* ``problem_expert/knowledge``: the knowledge after each change.
+* ``problem_expert/knowledge``: the knowledge after each change;
+* ``dot_graph``: the coloured plan graph (the last one of each plan is kept).
 
 Each change is also handed to a listener as a :class:`WatchEvent`, so a view can
 print it as it happens. :meth:`MissionWatch.feed` takes a message for a topic
@@ -27,7 +28,7 @@ from plansys_bridge.hub.messages import ActionStatus, ExecutionType, PerformerSt
 
 __all__ = ["ActionView", "MissionWatch", "PerformerView", "PlanView", "WatchEvent"]
 
-EventKind = Literal["plan", "status", "feedback", "assigned", "performer", "knowledge"]
+EventKind = Literal["plan", "status", "feedback", "assigned", "performer", "knowledge", "dot"]
 
 
 @dataclass
@@ -86,6 +87,7 @@ class WatchEvent:
     action: ActionView | None = None
     plan: PlanView | None = None
     performer: PerformerView | None = None
+    knowledge: hm.Knowledge | None = None
 
 
 Listener = Callable[[WatchEvent], None]
@@ -96,6 +98,7 @@ TOPICS = (
     Topics.ACTIONS_HUB,
     Topics.PERFORMERS_STATUS,
     Topics.KNOWLEDGE,
+    Topics.DOT_GRAPH,
 )
 
 
@@ -112,6 +115,8 @@ class MissionWatch:
         self.plans: list[PlanView] = []
         self.performers: dict[str, PerformerView] = {}
         self.knowledge: hm.Knowledge | None = None
+        self.dots: dict[str, str] = {}
+        """DOT graph name (``plan-1/0``: plan id / plan number) -> its last DOT text."""
         self._current: dict[str, list[ActionView]] = {}
         """Action text -> its views in the newest plan that has it (a plan may run
         the same action twice: ``(move r a b)`` early and again later)."""
@@ -144,7 +149,12 @@ class MissionWatch:
             self._on_heartbeat(msg, now)
         elif isinstance(msg, hm.Knowledge):
             self.knowledge = msg
-            self._emit(WatchEvent("knowledge", now))
+            self._emit(WatchEvent("knowledge", now, knowledge=msg))
+        elif isinstance(msg, hm.DotGraph):
+            first = msg.text.split("\n", 1)[0]
+            name = first.split('"')[1] if first.count('"') >= 2 else msg.plan_id
+            self.dots[name] = msg.text
+            self._emit(WatchEvent("dot", now))
 
     # ------------------------------------------------------------ queries
 
