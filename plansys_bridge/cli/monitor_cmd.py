@@ -12,7 +12,6 @@ for late joiners (transient-local), the rest shows from the next message on.
 from __future__ import annotations
 
 import argparse
-import asyncio
 import sys
 from typing import Any
 
@@ -78,6 +77,8 @@ def handle(args: argparse.Namespace) -> int:
 
 
 async def _wait(duration: float | None) -> None:
+    import asyncio
+
     if duration is not None:
         await asyncio.sleep(duration)
     else:
