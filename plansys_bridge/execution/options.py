@@ -57,6 +57,9 @@ class ExecutorOptions:
       since), so the knowledge used for replanning does not keep half an action.
     * ``action_template``: builds every action's subtree (default: the standard one).
     * ``templates``: per action name, a template that replaces the default.
+    * ``action_timeouts``: per action name, ``duration_overrun_percentage`` and/or
+      ``at_start_timeout`` overriding the global ones for that action (PlanSys2's
+      ``action_timeouts.<action>.duration_overrun_percentage`` parameters).
     """
 
     auction: AuctionPolicy = field(default_factory=AuctionPolicy)
@@ -71,6 +74,7 @@ class ExecutorOptions:
     rollback_on_halt: bool = True
     action_template: ActionTemplate | None = None
     templates: Mapping[str, ActionTemplate] = field(default_factory=dict)
+    action_timeouts: Mapping[str, Mapping[str, float | None]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         _optional_positive(self.at_start_timeout, "execution.at_start_timeout", allow_zero=True)
@@ -95,6 +99,40 @@ class ExecutorOptions:
         for name, template in self.templates.items():
             if not callable(template):
                 raise ConfigError("template must be callable", key=f"execution.templates.{name}")
+
+        if not isinstance(self.action_timeouts, Mapping):
+            raise ConfigError(
+                "must map action names to {duration_overrun_percentage, at_start_timeout}",
+                key="execution.action_timeouts",
+            )
+        for name, limits in self.action_timeouts.items():
+            where = f"execution.action_timeouts.{name}"
+            if not isinstance(limits, Mapping):
+                raise ConfigError(
+                    "must be a mapping {duration_overrun_percentage: N, at_start_timeout: S}",
+                    key=where,
+                )
+            for limit, value in limits.items():
+                if limit not in _ACTION_LIMITS:
+                    raise ConfigError(
+                        f"unknown setting (expected one of {', '.join(_ACTION_LIMITS)})",
+                        key=f"{where}.{limit}",
+                    )
+                _optional_positive(value, f"{where}.{limit}", allow_zero=True)
+
+    def overrun_for(self, action: str) -> float | None:
+        """The overrun percentage of ``action``: its own limit, else the global one."""
+        limits = _limits(self.action_timeouts, action)
+        if "duration_overrun_percentage" in limits:
+            return limits["duration_overrun_percentage"]
+        return self.overrun_percentage
+
+    def at_start_timeout_for(self, action: str) -> float | None:
+        """The at-start timeout of ``action``: its own, else the global one."""
+        limits = _limits(self.action_timeouts, action)
+        if "at_start_timeout" in limits:
+            return limits["at_start_timeout"]
+        return self.at_start_timeout
 
     def template_for(self, action: str) -> ActionTemplate | None:
         """The template for ``action``: its own, else the global one, else None."""
@@ -133,6 +171,17 @@ class ExecutorOptions:
             values["max_replans"] = value
         values["auction"] = AuctionPolicy.from_config(auction)
         return cls(**values)
+
+
+_ACTION_LIMITS = ("duration_overrun_percentage", "at_start_timeout")
+
+
+def _limits(table: Mapping[str, Mapping[str, float | None]], action: str) -> Mapping[str, Any]:
+    """The limits of ``action`` (names compare case-insensitively, as PDDL's do)."""
+    for name, limits in table.items():
+        if name.lower() == action.lower():
+            return limits
+    return {}
 
 
 def _optional_positive(value: object, key: str, *, allow_zero: bool) -> None:

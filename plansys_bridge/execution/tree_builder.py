@@ -76,7 +76,8 @@ class ActionNodes:
         return WaitForPredecessors(self.context, self.runtime, END)
 
     def wait_at_start_req(self, timeout: float | str | None = "default") -> WaitAtStartReq:
-        t = self.context.options.at_start_timeout if timeout == "default" else timeout
+        options = self.context.options
+        t = options.at_start_timeout_for(self.action) if timeout == "default" else timeout
         assert not isinstance(t, str)
         return WaitAtStartReq(self.context, self.runtime, t)
 
@@ -102,7 +103,7 @@ class ActionNodes:
         """ReactiveSequence[CheckTimeout?, CheckOverAllReq, *extra, ExecuteAction]:
         every guard is re-checked on each tick while the action runs."""
         guards: list[py_trees.behaviour.Behaviour] = []
-        pct = self.context.options.overrun_percentage
+        pct = self.context.options.overrun_for(self.action)
         if pct is not None and self.duration > 0:
             guards.append(self.check_timeout(pct))
         guards.append(self.check_over_all_req())
