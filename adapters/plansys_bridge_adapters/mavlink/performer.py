@@ -169,6 +169,11 @@ class MavlinkPerformer(ActionPerformer):
         cmd = self.commands[goal.action]
         self._last_feedback = -1e9
         vehicle = await self._link()
+        if vehicle.failsafe is not None and vehicle.telemetry.armed:
+            raise ActionFailed(
+                f"{vehicle.url}: the vehicle is in failsafe ({vehicle.failsafe!r}) and keeps "
+                "control until it has landed"
+            )
         vehicle.expected_modes = frozenset()
         vehicle.expect_armed = False
         run = getattr(self, f"_do_{cmd.do}")

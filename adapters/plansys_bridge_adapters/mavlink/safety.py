@@ -23,6 +23,8 @@ SAFE_MODES: dict[Model, tuple[str, ...]] = {
     "rover": ("HOLD", "RTL", "LOITER", "SMART_RTL"),
 }
 """Modes ``safe_mode`` may name, the first being the default."""
+FRESH_HEARTBEAT = 1.2
+"""Seconds to wait for a HEARTBEAT after a failure (ArduPilot sends one a second)."""
 SAFE_TIMEOUT = 1.5
 """Seconds one safe-mode switch may take; the action's failure is reported after it."""
 
@@ -36,10 +38,20 @@ def safe_mode_for(model: Model | None, configured: str | None) -> str:
 async def make_safe(vehicle: MavlinkVehicle, configured: str | None) -> str | None:
     """Switch an armed vehicle still in GUIDED to its safe mode; returns the mode set.
 
-    Bounded by :data:`SAFE_TIMEOUT` so a failure is reported promptly even when the
-    vehicle does not answer.
+    Decided on a HEARTBEAT newer than the failure (the vehicle may have switched mode
+    itself a moment ago) and bounded by :data:`SAFE_TIMEOUT`, so a failure is
+    reported promptly even when the vehicle does not answer.
     """
-    if not vehicle.connected or not vehicle.telemetry.armed or vehicle.mode != "GUIDED":
+    if not vehicle.connected:
+        return None
+    since = asyncio.get_running_loop().time()
+    try:
+        await vehicle.wait_for(
+            lambda: vehicle.telemetry.last_heartbeat >= since, FRESH_HEARTBEAT, "a HEARTBEAT"
+        )
+    except MavlinkError:
+        return None
+    if not vehicle.telemetry.armed or vehicle.mode != "GUIDED":
         return None
     if not vehicle.in_control:
         return None  # a failsafe or someone else has it (its HEARTBEAT may lag)

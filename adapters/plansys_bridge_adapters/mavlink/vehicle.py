@@ -60,6 +60,8 @@ EKF_NEEDED = 0x01 | 0x02 | 0x10 | 0x20
 """EKF_ATTITUDE | EKF_VELOCITY_HORIZ | EKF_POS_HORIZ_ABS | EKF_POS_VERT_ABS."""
 EKF_BAD = 0x80 | 0x400
 """EKF_CONST_POS_MODE | EKF_UNINITIALIZED: no usable position yet."""
+EXPLAIN_WAIT = 0.3
+"""Seconds a mode change nobody asked for waits for the STATUSTEXT explaining it."""
 LIFT_OFF_M = 0.5
 """Climb above the take-off altitude that shows a take-off is under way."""
 ARMING_TEXT_PREFIXES = ("prearm:", "arm:")
@@ -154,6 +156,9 @@ class MavlinkVehicle:
         self.boot_fallbacks = 0
         self.in_control = True
         """False once a failsafe or someone else took the vehicle, until we set a mode."""
+        self.failsafe: str | None = None
+        """The vehicle's failsafe STATUSTEXT while that failsafe holds (until disarmed)."""
+        self._unexplained_mode: int | None = None
         """Mode changes ArduPilot made on its own while booting (not takeovers)."""
 
     # ------------------------------------------------------------ connection
@@ -338,6 +343,8 @@ class MavlinkVehicle:
         tel.system_status = int(msg.system_status)
         tel.mav_type = int(msg.type)
         self._check_mode(tel.custom_mode)
+        if was_armed and not tel.armed:
+            self.failsafe = None  # landed and disarmed: a new flight may start
         if was_armed and not tel.armed and self.expect_armed:
             self._raise_fault(VehicleFault(self.url, f"disarmed unexpectedly{self._recent_note()}"))
 
@@ -359,6 +366,20 @@ class MavlinkVehicle:
             log.info("%s: mode fell back to %s while the vehicle booted", self.url, name)
             self.boot_fallbacks += 1
             return
+        if self._unexplained_mode is None and self._loop is not None:
+            # ArduPilot queues the STATUSTEXT that explains a mode change ("Battery
+            # Failsafe") and may send the HEARTBEAT first: give it a moment to arrive.
+            self._unexplained_mode = mode
+            self._loop.call_later(EXPLAIN_WAIT, self._mode_fault)
+
+    def _mode_fault(self) -> None:
+        mode, self._unexplained_mode = self._unexplained_mode, None
+        current = self.telemetry.custom_mode
+        if mode is None or current is None or not self.expected_modes:
+            return
+        if current in self.expected_modes:
+            return
+        name = self.mode_name_of(current)
         expected = "/".join(sorted(self.mode_name_of(m) for m in self.expected_modes))
         failsafe = self._recent_failsafe()
         if failsafe is not None:
@@ -399,7 +420,10 @@ class MavlinkVehicle:
         lowered = text.lower()
         if lowered.startswith(ARMING_TEXT_PREFIXES):
             return  # arming checks explain refusals; arm() reports them
-        if "failsafe" in lowered:
+        if "failsafe" in lowered and "cleared" in lowered:
+            self.failsafe = None
+        elif "failsafe" in lowered:
+            self.failsafe = text
             self._raise_fault(VehicleFault(self.url, f"failsafe: {text!r}", took_over=True))
         elif entry.severity <= ML.MAV_SEVERITY_ERROR:
             self._raise_fault(

@@ -4,6 +4,7 @@
 * :class:`GroundStation`: a second ground station (pymavlink) on another SITL port:
   watches HEARTBEAT, position and STATUSTEXT, reads and sets parameters, changes
   the mode, as Mission Planner or MAVProxy would next to the adapter;
+* :class:`Relay`: a TCP link between the adapter and SITL that a test can cut;
 * :func:`sitl_mission`: a shipped mission file with its vehicles pointed at SITL;
 * :func:`run_cli`: ``plansys-bridge run MISSION --json`` in a child process.
 """
@@ -12,6 +13,8 @@ from __future__ import annotations
 
 import contextlib
 import json
+import select
+import socket
 import subprocess
 import sys
 import threading
@@ -121,8 +124,10 @@ class GroundStation:
             seen.alt = msg.relative_alt / 1000
             seen.max_alt = max(seen.max_alt, seen.alt)
             seen.position = (msg.lat / 1e7, msg.lon / 1e7)
-            if self.home is None:
+            if self.home is None and msg.lat != 0:  # 0, 0 until the EKF has an origin
                 self.home = seen.position
+            if self.home is None:
+                return
             seen.north_max = max(seen.north_max, (seen.position[0] - self.home[0]) * 111_195)
         elif kind == "STATUSTEXT":
             seen.texts.append((stamp, msg.severity, msg.text))
@@ -241,6 +246,55 @@ class Sitl:
     def stop_all(self) -> None:
         for sitl in self.running:
             sitl.stop()
+
+
+class Relay:
+    """A TCP relay between the adapter and SITL: :meth:`cut` drops the link at once,
+    as a radio going out of range or a cable pulled would."""
+
+    def __init__(self, target_url: str) -> None:
+        _, host, port = target_url.split(":")
+        self._target = (host, int(port))
+        self._server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self._server.bind(("127.0.0.1", 0))
+        self._server.listen(1)
+        self.url = f"tcp:127.0.0.1:{self._server.getsockname()[1]}"
+        self._sockets: list[socket.socket] = [self._server]
+        self._closed = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="sitl-relay", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        try:
+            client, _ = self._server.accept()
+            upstream = socket.create_connection(self._target)
+        except OSError:
+            return
+        self._sockets += [client, upstream]
+        peers = {client: upstream, upstream: client}
+        while not self._closed.is_set():
+            try:
+                ready, _, _ = select.select(list(peers), [], [], 0.1)
+                for sock in ready:
+                    data = sock.recv(65536)
+                    if not data:
+                        return
+                    peers[sock].sendall(data)
+            except (OSError, ValueError):
+                return
+
+    def cut(self) -> None:
+        """Close both sides: the adapter sees its link closed, SITL its client gone."""
+        self._closed.set()
+        for sock in self._sockets:
+            with contextlib.suppress(OSError):
+                sock.shutdown(socket.SHUT_RDWR)
+            with contextlib.suppress(OSError):
+                sock.close()
+
+    def close(self) -> None:
+        self.cut()
+        self._thread.join(5)
 
 
 # ------------------------------------------------------------------ missions

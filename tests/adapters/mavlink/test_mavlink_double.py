@@ -132,7 +132,7 @@ def test_arming_refused_until_ekf_then_auto_disarm() -> None:
             assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, COPTER_MODES["GUIDED"]) == 0
             assert client.command(ml.MAV_CMD_COMPONENT_ARM_DISARM, 1) == ml.MAV_RESULT_FAILED
             texts = [m.text for m in client.seen if m.get_type() == "STATUSTEXT"]
-            assert "PreArm: Need Position Estimate" in texts
+            assert "Arm: Need Position Estimate" in texts
             ekf = client.until(
                 lambda m: m.get_type() == "EKF_STATUS_REPORT" and m.flags & ml.EKF_POS_HORIZ_ABS,
                 seconds=3,

@@ -39,8 +39,8 @@ def assert_parked(gcs: GroundStation, mode: str) -> None:
 def test_copter_survey_with_a_second_ground_station(sitl: Sitl, tmp_path: Path) -> None:
     copter = sitl.start("copter", speedup=SPEEDUP)
     mission = sitl_mission("mavlink_copter.yaml", {"uav1": copter.url}, tmp_path)
+    proc = start_cli(mission)  # SITL opens its other ports once the adapter connects
     with GroundStation(copter.gcs_url, "copter") as gcs:
-        proc = start_cli(mission)
         gcs.stream("GLOBAL_POSITION_INT", 4)
         # the second ground station sees the flight and reads parameters during it
         gcs.wait(lambda s: s.max_alt > 5, 120, "the copter to climb")
@@ -48,13 +48,8 @@ def test_copter_survey_with_a_second_ground_station(sitl: Sitl, tmp_path: Path) 
         sysid = gcs.param("SYSID_THISMAV")
         report = finish_cli(proc)
         assert_succeeded(report)
-        assert [r["action"].split()[0] for r in report["records"]] == [
-            "(takeoff",
-            "(fly",
-            "(fly",
-            "(fly",
-            "(land",
-        ]
+        kinds = [r["action"].split()[0] for r in report["records"]]
+        assert kinds[0] == "(takeoff" and kinds[-1] == "(land" and "(fly" in kinds
         assert_parked(gcs, "LAND")
         modes = [m for _, m in gcs.seen.modes]
         assert "GUIDED" in modes and modes[-1] == "LAND"
@@ -66,10 +61,11 @@ def test_copter_survey_with_a_second_ground_station(sitl: Sitl, tmp_path: Path) 
 def test_rover_patrol(sitl: Sitl, tmp_path: Path) -> None:
     rover = sitl.start("rover", speedup=SPEEDUP)
     mission = sitl_mission("mavlink_rover.yaml", {"ugv1": rover.url}, tmp_path)
+    proc = start_cli(mission)
     with GroundStation(rover.gcs_url, "rover") as gcs:
-        report = run_cli(mission)
+        report = finish_cli(proc)
         assert_succeeded(report)
-        assert len(report["records"]) == 3
+        assert [r["action"].split()[0] for r in report["records"]] == ["(drive"] * 4
         assert_parked(gcs, "HOLD")
 
 
@@ -80,8 +76,9 @@ def test_fleet_one_vehicle_in_real_time_one_faster(sitl: Sitl, tmp_path: Path) -
     rover = sitl.start("rover", speedup=1.0, home=home)
     urls = {"uav1": copter.url, "ugv1": rover.url}
     mission = sitl_mission("mavlink_fleet.yaml", urls, tmp_path)
+    proc = start_cli(mission)
     with GroundStation(copter.gcs_url, "copter") as air, GroundStation(rover.gcs_url) as ground:
-        report = run_cli(mission)
+        report = finish_cli(proc)
         assert_succeeded(report)
         by = {r["action"]: r["performer"] for r in report["records"]}
         assert all(p == "uav1_performer" for a, p in by.items() if " uav1 " in a)

@@ -97,7 +97,7 @@ def test_refusal_quotes_the_vehicle_and_arming_retries_until_timeout() -> None:
         arms = [c for c in double.sim.commands_seen if c == ml.MAV_CMD_COMPONENT_ARM_DISARM]
     assert errors == [
         f"{double.url}: arming refused (MAV_RESULT_FAILED): still refused "
-        "after 0.5 s: PreArm: Need Position Estimate"
+        "after 0.5 s: Arm: Need Position Estimate"
     ]
     assert len(arms) >= 3
 

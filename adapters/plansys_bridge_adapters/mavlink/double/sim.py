@@ -97,12 +97,12 @@ class SimParams:
 
     model: Model = "copter"
     home: GeoPoint = field(default_factory=lambda: GeoPoint(-35.363261, 149.165230, 584.0))
-    ekf_delay: float = 42.0
-    """Seconds after the first client connects until the EKF uses GPS (SITL: ~42 s)."""
-    boot_delay: float = 1.0
-    """Seconds until "ArduPilot Ready": the end of boot, when ArduPilot sets its
-    initial mode over whatever mode a ground station set while it booted."""
-    rc_mode_delay: float = 2.8
+    ekf_delay: float = 41.0
+    """Seconds after the first client connects until the EKF uses GPS (SITL 4.6: ~41 s)."""
+    boot_delay: float = 2.0
+    """Seconds until "ArduPilot Ready" (SITL 4.6: ~2 s): the end of boot, when ArduPilot
+    sets its initial mode over whatever mode a ground station set while it booted."""
+    rc_mode_delay: float = 2.7
     """Rover: seconds until RC input arrives and the mode channel (RC 8, held at
     1800 by SITL) switches the rover to MANUAL, silently dropping an earlier mode."""
     disarm_delay: float = 10.0
@@ -138,7 +138,10 @@ class VehicleSim:
         self.booted = False
         self.rc_mode_read = self.model != "rover"
         self.armed = False
-        self.mode = mode_number(self.model, "STABILIZE" if self.model == "copter" else "MANUAL")
+        # while booting: the copter reports STABILIZE, the rover INITIALISING
+        self.mode = mode_number(
+            self.model, "STABILIZE" if self.model == "copter" else "INITIALISING"
+        )
         self.north = 0.0
         self.east = 0.0
         self.alt = 0.0  # metres above home
@@ -193,6 +196,7 @@ class VehicleSim:
         if not self.started:
             self.started = True
             self.statustext(ML.MAV_SEVERITY_INFO, f"ArduPilot {self._firmware()} double")
+            self.statustext(ML.MAV_SEVERITY_INFO, "Calibrating barometer")
 
     def handle(self, msg: Any) -> None:
         """React to one decoded message from the ground station."""
@@ -332,7 +336,7 @@ class VehicleSim:
         if self.armed:
             return ML.MAV_RESULT_ACCEPTED
         if not self.ekf_ready:
-            self.statustext(ML.MAV_SEVERITY_CRITICAL, "PreArm: Need Position Estimate")
+            self.statustext(ML.MAV_SEVERITY_CRITICAL, "Arm: Need Position Estimate")
             return ML.MAV_RESULT_FAILED
         if self.model == "copter" and self.mode_name not in COPTER_ARMABLE:
             self.statustext(ML.MAV_SEVERITY_CRITICAL, "Arm: Mode not armable")
@@ -657,8 +661,8 @@ class VehicleSim:
             state = ML.MAV_STATE_CRITICAL
         elif self.armed:
             state = ML.MAV_STATE_ACTIVE
-        elif not self.ekf_ready:
-            state = ML.MAV_STATE_BOOT if self.time < 1.0 else ML.MAV_STATE_STANDBY
+        elif not self.booted:
+            state = ML.MAV_STATE_BOOT
         else:
             state = ML.MAV_STATE_STANDBY
         mav_type = MAV_TYPE_QUADROTOR if self.model == "copter" else MAV_TYPE_GROUND_ROVER
