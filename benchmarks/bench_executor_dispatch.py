@@ -30,7 +30,7 @@ from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus
 from plansys_bridge.hub.transport import InProcessTransport
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
-from plansys_bridge.pddl.model import Atom
+from plansys_bridge.pddl.model import Atom, Domain
 from plansys_bridge.pddl.parser import parse_domain
 from plansys_bridge.performers.base import PerformerContext
 from plansys_bridge.planning.plan import Plan, PlanStep
@@ -53,7 +53,8 @@ SPOTS = 10
 """The robot goes round a ring of spots (a small knowledge base, as on a robot)."""
 
 
-async def _bench(actions: int) -> dict[str, dict[str, float]]:
+def chain_task(actions: int) -> tuple[Domain, ProblemExpert, Plan]:
+    """The chain's domain, its knowledge (r1 at s0) and the plan of ``actions`` steps."""
     domain = parse_domain(DOMAIN, "<chain>")
     knowledge = ProblemExpert(domain)
     with knowledge.transaction():
@@ -67,6 +68,11 @@ async def _bench(actions: int) -> dict[str, dict[str, float]]:
             for i in range(actions)
         )
     )
+    return domain, knowledge, plan
+
+
+async def _bench(actions: int) -> dict[str, dict[str, float]]:
+    domain, knowledge, plan = chain_task(actions)
     hub = Hub(InProcessTransport(), WallClock())
     await hub.start()
     performer = StampingPerformer(PerformerContext(hub, hub.clock), "worker", {"step": ["r1"]})

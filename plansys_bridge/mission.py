@@ -96,11 +96,14 @@ def make_clock(mission: MissionConfig) -> Clock:
     return WallClock(time_scale=mission.clock.time_scale)
 
 
-def make_transport(mission: MissionConfig, domain: Domain | None = None) -> Transport:
+def make_transport(
+    mission: MissionConfig, domain: Domain | None = None, role: str = "executor"
+) -> Transport:
     """The hub transport the mission's ``transport:`` names (DDS imported only then).
 
     With ``domain``, a DDS transport drops received messages about actions the domain
-    does not have (:func:`~plansys_bridge.hub.dds_checks.domain_check`).
+    does not have (:func:`~plansys_bridge.hub.dds_checks.domain_check`). Over DDS the
+    process shows to ROS 2 tools as the node ``<mission name>_<role>``.
     """
     if mission.transport.kind == "dds":
         try:
@@ -115,7 +118,12 @@ def make_transport(mission: MissionConfig, domain: Domain | None = None) -> Tran
         check = None
         if domain is not None:
             check = domain_check({a.name: len(a.parameters) for a in domain.actions})
-        return DdsTransport(mission.transport.domain_id, config=_dds_config(mission), check=check)
+        return DdsTransport(
+            mission.transport.domain_id,
+            config=_dds_config(mission),
+            check=check,
+            node_name=f"{mission.name}_{role}",
+        )
     return InProcessTransport()
 
 

@@ -72,7 +72,7 @@ async def _serve(mission: MissionConfig, clock: Clock, duration: float | None) -
 
     domain = load_domain(mission)
     knowledge = build_knowledge(mission, domain)
-    hub = Hub(make_transport(mission, domain), clock)
+    hub = Hub(make_transport(mission, domain, role="performers"), clock)
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     signals = (signal.SIGINT, signal.SIGTERM)

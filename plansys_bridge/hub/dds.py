@@ -60,6 +60,7 @@ from plansys_bridge.errors import HubError
 from plansys_bridge.hub.dds_checks import SampleCheck, check_sample
 from plansys_bridge.hub.dds_codec import ROUTES, Channel, Route, decode, encode
 from plansys_bridge.hub.dds_config import check_domain_id, loopback_config
+from plansys_bridge.hub.dds_discovery import publish_discovery_info
 from plansys_bridge.hub.messages import Topics
 from plansys_bridge.hub.transport import InProcessTransport, Subscription
 
@@ -174,9 +175,13 @@ class DdsTransport:
         *,
         config: str | None = None,
         check: SampleCheck | None = None,
+        node_name: str = "plansys_bridge",
     ) -> None:
         self.domain_id = check_domain_id(domain_id)
         self.config = config if config is not None else loopback_config(domain_id)
+        self.node_name = node_name
+        """The ROS 2 node this process shows as on ``ros_discovery_info``."""
+        self._discovery: tuple[Any, Any] | None = None
         self._check: SampleCheck = check if check is not None else check_sample
         """What a received message must pass (:mod:`~plansys_bridge.hub.dds_checks`)."""
         self._fanout = InProcessTransport()
@@ -240,6 +245,12 @@ class DdsTransport:
                     writers[0],
                     writers[1] if len(writers) > 1 else None,
                 )
+            self._discovery = publish_discovery_info(
+                self._participant,
+                self.node_name,
+                readers=[ep.reader for ep in self._endpoints],
+                writers=[ep.writer for ep in self._endpoints],
+            )
         except DDSException as exc:
             raise HubError(f"DDS domain {self.domain_id}: cannot create endpoints: {exc}") from exc
 
@@ -266,7 +277,8 @@ class DdsTransport:
             thread.join(timeout=5.0)
             if thread.is_alive():  # pragma: no cover - the wait set wakes within 1 s
                 log.error("DDS reader thread of domain %d did not stop", self.domain_id)
-        entities: list[Any] = []
+        entities: list[Any] = list(self._discovery or ())
+        self._discovery = None
         for ep in self._endpoints:
             entities += [ep.condition, ep.reader, ep.writer, ep.topic]
         entities += [self._guard, self._waitset, self._participant]

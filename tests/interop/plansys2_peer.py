@@ -80,6 +80,30 @@ class ActionPerformerStatus_(
     node_name: str = ""
 
 
+# plansys2_msgs/msg/PlanItem.msg: float32 time / string action / float32 duration
+@dataclass
+class PlanItem_(IdlStruct, typename="plansys2_msgs::msg::dds_::PlanItem_"):
+    time: float32 = 0.0
+    action: str = ""
+    duration: float32 = 0.0
+
+
+# plansys2_msgs/msg/Plan.msg: plansys2_msgs/PlanItem[] items
+@dataclass
+class Plan_(IdlStruct, typename="plansys2_msgs::msg::dds_::Plan_"):
+    items: sequence[PlanItem_] = field(default_factory=list)
+
+
+# plansys2_msgs/msg/Knowledge.msg:
+#   string[] instances / string[] predicates / string[] functions / string goal
+@dataclass
+class Knowledge_(IdlStruct, typename="plansys2_msgs::msg::dds_::Knowledge_"):
+    instances: sequence[str] = field(default_factory=list)
+    predicates: sequence[str] = field(default_factory=list)
+    functions: sequence[str] = field(default_factory=list)
+    goal: str = ""
+
+
 def loopback_domain(domain_id: int) -> Domain:
     """Cyclone on 127.0.0.1 only, unicast discovery by participant index (as the tests use)."""
     xml = (
