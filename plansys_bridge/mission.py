@@ -12,7 +12,8 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-from collections.abc import Callable, Iterator, Mapping
+import secrets
+from collections.abc import Callable, Iterator, Mapping, Set
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -97,12 +98,17 @@ def make_clock(mission: MissionConfig) -> Clock:
 
 
 def make_transport(
-    mission: MissionConfig, domain: Domain | None = None, role: str = "executor"
+    mission: MissionConfig,
+    domain: Domain | None = None,
+    role: str = "executor",
+    plan_ids: Set[str] | None = None,
 ) -> Transport:
     """The hub transport the mission's ``transport:`` names (DDS imported only then).
 
     With ``domain``, a DDS transport drops received messages about actions the domain
-    does not have (:func:`~plansys_bridge.hub.dds_checks.domain_check`). Over DDS the
+    does not have (:func:`~plansys_bridge.hub.dds_checks.domain_check`), and with
+    ``plan_ids`` (filled as plans start) those about a plan this process does not
+    execute. Over DDS the
     process shows to ROS 2 tools as the node ``<mission name>_<role>``.
     """
     if mission.transport.kind == "dds":
@@ -117,7 +123,8 @@ def make_transport(
             ) from exc
         check = None
         if domain is not None:
-            check = domain_check({a.name: len(a.parameters) for a in domain.actions})
+            actions = {a.name: len(a.parameters) for a in domain.actions}
+            check = domain_check(actions, plan_ids)
         return DdsTransport(
             mission.transport.domain_id,
             config=_dds_config(mission),
@@ -306,7 +313,9 @@ class MissionSession:
         self.mission = mission
         self.domain = domain
         self.knowledge = knowledge
-        self.hub = Hub(make_transport(mission, domain), clock)
+        self.plan_ids: set[str] = set()
+        """The plans this process executes (request ids start with one of them)."""
+        self.hub = Hub(make_transport(mission, domain, plan_ids=self.plan_ids), clock)
         self.local_performers = local_performers
         """False: the performers run in other processes (DDS); wait for their heartbeats."""
         self.out = out
@@ -529,7 +538,9 @@ async def _run(
         view = make_live_view(elapsed, mission.name) if live and out is not None else None
         listener = view if view is not None else ProgressLines(say, elapsed)
         watch = MissionWatch(clock.now, listener).attach(session.hub)
-        execute = executor.execute(plan, goal=knowledge.get_goal())
+        plan_id = f"{mission.name}-{secrets.token_hex(4)}"
+        session.plan_ids.add(plan_id)  # DDS: messages naming another plan are dropped
+        execute = executor.execute(plan, goal=knowledge.get_goal(), plan_id=plan_id)
         try:
             with view if view is not None else contextlib.nullcontext():
                 if view is not None:

@@ -4,7 +4,9 @@ Any DDS node of the domain can write on the hub's topics. Decoding already refus
 what the ``.msg`` types allow but PlanSys2's protocol does not (a constant outside the
 message's own, a non-finite number; see :mod:`plansys_bridge.hub.dds_convert`). The
 checks here add ranges (completion within 0..1, no negative durations or bids) and
-what only the mission knows: the domain's actions and their arity. A check returns the
+what only the mission knows: the domain's actions and their arity, and the plans this
+executor runs (a request id ``<plan_id>/<plan>/<step>`` or an executing plan naming
+another plan belongs to some other executor on the domain). A check returns the
 reason to drop a message, or None; :class:`~plansys_bridge.hub.dds.DdsTransport` drops it with one
 log line naming the topic and the writer, so a foreign node can neither crash the
 executor nor reach the knowledge.
@@ -13,11 +15,11 @@ executor nor reach the knowledge.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Set
 
 from plansys_bridge.hub import messages as hm
 
-__all__ = ["SampleCheck", "check_sample", "domain_check"]
+__all__ = ["SampleCheck", "check_sample", "domain_check", "plan_of"]
 
 SampleCheck = Callable[[str, object], "str | None"]
 """``check(hub_topic, message)`` -> why the message must be dropped, or None."""
@@ -51,8 +53,25 @@ def _action_name_and_arity(text: str) -> tuple[str, int] | None:
     return words[0], len(words) - 1
 
 
-def domain_check(actions: Mapping[str, int]) -> SampleCheck:
-    """:func:`check_sample` plus the domain's action names and arities (name -> arity)."""
+def plan_of(request_id: str) -> str:
+    """The plan id a request id ``<plan_id>/<plan number>/<step>`` starts with."""
+    parts = request_id.rsplit("/", 2)
+    return parts[0] if len(parts) == 3 else request_id
+
+
+def domain_check(actions: Mapping[str, int], plan_ids: Set[str] | None = None) -> SampleCheck:
+    """:func:`check_sample` plus the domain's action names and arities (name -> arity).
+
+    With ``plan_ids`` (the plans this process executes, filled as they start), a
+    project message naming another plan is dropped too: it belongs to some other
+    executor on the domain. Before the first plan starts nothing is known, nothing
+    is dropped for it.
+    """
+
+    def other_plan(plan_id: str) -> str | None:
+        if plan_ids and plan_id not in plan_ids:
+            return f"plan id {plan_id!r} is not a plan of this executor"
+        return None
 
     def unknown(action: str, arguments: int | None) -> str | None:
         arity = actions.get(action)
@@ -64,6 +83,12 @@ def domain_check(actions: Mapping[str, int]) -> SampleCheck:
 
     def check(topic: str, msg: object) -> str | None:
         reason = check_sample(topic, msg)
+        if reason is not None:
+            return reason
+        if isinstance(msg, hm.ActionExecution) and msg.request_id:
+            reason = other_plan(plan_of(msg.request_id))
+        if isinstance(msg, hm.ExecutingPlan) and msg.plan_id:
+            reason = other_plan(msg.plan_id)
         if reason is not None:
             return reason
         if isinstance(msg, hm.ActionExecution | hm.ActionExecutionInfo):

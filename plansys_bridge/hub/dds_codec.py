@@ -80,21 +80,15 @@ def dds_topic_name(hub_topic: str, *, project: bool = False) -> str:
 
 # -- the messages that are not one hub dataclass per ROS type ------------------------------
 
-_encode_execution_plain = hub_encoder(ACTION_EXECUTION)
+_encode_bridge_execution = hub_encoder(BRIDGE_ACTION_EXECUTION)
 _decode_execution_plain = hub_decoder(hm.ActionExecution, ACTION_EXECUTION)
-_encode_plan = hub_encoder(PLAN)
+_encode_bridge_plan = hub_encoder(BRIDGE_EXECUTING_PLAN)
 _decode_plan = hub_decoder(hm.Plan, PLAN)
 
 
 def _encode_execution(m: hm.ActionExecution) -> tuple[IdlStruct, IdlStruct | None]:
-    plain = _encode_execution_plain(m)
-    wrapped = dds_type(BRIDGE_ACTION_EXECUTION)(
-        execution=plain,
-        request_id=m.request_id,
-        has_bid=m.bid is not None,
-        bid=float(m.bid) if m.bid is not None else 0.0,
-    )
-    return plain, wrapped
+    wrapped = _encode_bridge_execution(hm.BridgeActionExecution.of(m))
+    return wrapped.execution, wrapped
 
 
 def _decode_bridge_execution(x: Any) -> hm.ActionExecution:
@@ -105,9 +99,8 @@ def _decode_bridge_execution(x: Any) -> hm.ActionExecution:
 
 def _encode_executing_plan(m: hm.ExecutingPlan | hm.Plan) -> tuple[IdlStruct, IdlStruct | None]:
     executing = m if isinstance(m, hm.ExecutingPlan) else hm.ExecutingPlan(plan=m)
-    plan = _encode_plan(executing.plan)
-    wrapped = dds_type(BRIDGE_EXECUTING_PLAN)(plan_id=executing.plan_id, plan=plan)
-    return plan, wrapped
+    wrapped = _encode_bridge_plan(executing)
+    return wrapped.plan, wrapped
 
 
 def _decode_bridge_plan(x: Any) -> hm.ExecutingPlan:

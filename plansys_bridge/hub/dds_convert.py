@@ -19,6 +19,7 @@ from functools import cache
 from typing import Any
 
 from plansys_bridge.errors import HubError
+from plansys_bridge.interfaces.convert import DURATION, TIME, Encoder, message_encoder
 from plansys_bridge.interfaces.dds import dds_type
 from plansys_bridge.interfaces.typestore import Nodetype, ros2_fielddefs
 
@@ -32,11 +33,8 @@ __all__ = [
     "to_idl_time",
 ]
 
-Encoder = Callable[[Any], Any]
 Decoder = Callable[[Any], Any]
 
-TIME = "builtin_interfaces/msg/Time"
-DURATION = "builtin_interfaces/msg/Duration"
 _INT32 = (-(2**31), 2**31 - 1)
 _FLOATS = {"float32", "float64"}
 
@@ -67,40 +65,10 @@ def from_idl_seconds(value: Any) -> float:
     return float(value.sec + value.nanosec * 1e-9)
 
 
-def _out_value(desc: tuple[Any, Any]) -> Encoder:
-    kind, detail = desc
-    if kind == Nodetype.BASE:
-        base = detail[0]
-        if base == "string":
-            return str
-        if base == "bool":
-            return bool
-        return float if base in _FLOATS else int
-    if kind == Nodetype.NAME:
-        if detail == TIME:
-            return to_idl_time
-        if detail == DURATION:
-            return to_idl_duration
-        return hub_encoder(detail)
-    element = _out_value(detail[0])
-    return lambda values: [element(v) for v in values]
-
-
 @cache
 def hub_encoder(ros_type: str) -> Encoder:
     """hub dataclass -> the DDS sample of ``ros_type``; fields the hub lacks keep defaults."""
-    idl_class = dds_type(ros_type)
-    fields = [(name, _out_value(desc)) for name, desc in ros2_fielddefs()[ros_type][1]]
-
-    def encode(msg: Any) -> Any:
-        values = {}
-        for name, convert in fields:
-            value = getattr(msg, name, None)
-            if value is not None:
-                values[name] = convert(value)
-        return idl_class(**values)
-
-    return encode
+    return message_encoder(ros_type, dds_type, _split_seconds)
 
 
 def _finite(name: str) -> Decoder:

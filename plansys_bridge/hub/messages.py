@@ -67,6 +67,26 @@ class ActionExecution:
 
 
 @dataclass(frozen=True)
+class BridgeActionExecution:
+    """An :class:`ActionExecution` as ``plansys_bridge_msgs/msg/ActionExecution``.
+
+    The PlanSys2 message (whose type lacks them) wrapped with the project's fields, as
+    it travels on ``rt/plansys_bridge/actions_hub`` and is recorded on
+    ``/plansys_bridge/actions_hub``.
+    """
+
+    execution: ActionExecution
+    request_id: str
+    has_bid: bool
+    bid: float
+
+    @classmethod
+    def of(cls, msg: ActionExecution) -> BridgeActionExecution:
+        bid = msg.bid if msg.bid is not None else 0.0
+        return cls(msg, msg.request_id, msg.bid is not None, float(bid))
+
+
+@dataclass(frozen=True)
 class ActionExecutionInfo:
     """Per-action execution state, published on ``action_execution_info``."""
 

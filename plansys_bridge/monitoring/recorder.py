@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.hub import messages as hm
+from plansys_bridge.interfaces.convert import Encoder, message_encoder
 
 from . import msgs
 from .rosbags_api import SerdeError, StoragePlugin, Writer, WriterError, np
@@ -35,6 +36,15 @@ if TYPE_CHECKING:
     from rosbags.interfaces import Connection
 
 log = logging.getLogger(__name__)
+
+
+_PLAIN: tuple[tuple[type, str], ...] = (
+    (hm.ActionExecutionInfo, msgs.ACTION_EXECUTION_INFO),
+    (hm.ActionPerformerStatus, msgs.ACTION_PERFORMER_STATUS),
+    (hm.Plan, msgs.PLAN),
+    (hm.Knowledge, msgs.KNOWLEDGE),
+)
+"""Hub messages recorded as one ROS message of the same fields."""
 
 
 class RecorderError(PlansysBridgeError):
@@ -104,6 +114,7 @@ class MissionRecorder:
         self.clock: _Clock = clock if clock is not None else hub.clock
         self.hub_topics = tuple(topics) if topics is not None else self.HUB_TOPICS
         self.store = msgs.hub_typestore()
+        self._encoders: dict[str, Encoder] = {}
         self.counts: dict[str, int] = {}
         self.dropped = 0
         self._lock = threading.Lock()
@@ -248,38 +259,32 @@ class MissionRecorder:
         self.record(topic, msgs.PLAN, self._plan(plan), stamp)
 
     # -- conversions -----------------------------------------------------------------
-    def time(self, seconds: float) -> Any:
+    @staticmethod
+    def _split(seconds: float, what: str = "stamp") -> tuple[int, int]:
         sec = math.floor(seconds)
-        nanosec = min(999_999_999, round((seconds - sec) * 1e9))
-        return self.store.types["builtin_interfaces/msg/Time"](sec=int(sec), nanosec=nanosec)
+        return int(sec), min(999_999_999, round((seconds - sec) * 1e9))
+
+    def time(self, seconds: float) -> Any:
+        sec, nanosec = self._split(seconds)
+        return self.store.types["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec)
 
     def duration(self, seconds: float) -> Any:
-        sec = math.floor(seconds)
-        nanosec = min(999_999_999, round((seconds - sec) * 1e9))
-        return self.store.types["builtin_interfaces/msg/Duration"](sec=int(sec), nanosec=nanosec)
+        sec, nanosec = self._split(seconds)
+        return self.store.types["builtin_interfaces/msg/Duration"](sec=sec, nanosec=nanosec)
 
     def header(self, stamp: float, frame_id: str) -> Any:
         return self.store.types["std_msgs/msg/Header"](stamp=self.time(stamp), frame_id=frame_id)
 
-    def _plan(self, plan: hm.Plan) -> Any:
-        t = self.store.types
-        return t[msgs.PLAN](
-            items=[
-                t[msgs.PLAN_ITEM](time=float(i.time), action=i.action, duration=float(i.duration))
-                for i in plan.items
-            ]
-        )
+    def _encoder(self, ros_type: str) -> Encoder:
+        """Hub message -> the rosbags message of ``ros_type``, by the ``.msg`` fields."""
+        found = self._encoders.get(ros_type)
+        if found is None:
+            found = message_encoder(ros_type, self.store.types.__getitem__, self._split)
+            self._encoders[ros_type] = found
+        return found
 
-    def _action_execution(self, m: hm.ActionExecution) -> Any:
-        return self.store.types[msgs.ACTION_EXECUTION](
-            type=int(m.type),
-            node_id=m.node_id,
-            action=m.action,
-            arguments=list(m.arguments),
-            success=bool(m.success),
-            completion=float(m.completion),
-            status=m.status,
-        )
+    def _plan(self, plan: hm.Plan) -> Any:
+        return self._encoder(msgs.PLAN)(plan)
 
     def convert(self, hub_msg: object) -> list[tuple[str, str, Any]]:
         """Hub message -> ``[(bag topic suffix, msgtype, ROS message)]``.
@@ -287,58 +292,21 @@ class MissionRecorder:
         The first entry goes on the hub topic; a second one, if any, carries the
         project's extra fields on the same topic under :data:`BRIDGE_PREFIX`.
         """
-        t = self.store.types
         m = hub_msg
         if isinstance(m, hm.ActionExecution):
-            ros = self._action_execution(m)
-            extra = t[msgs.BRIDGE_ACTION_EXECUTION](
-                execution=ros,
-                request_id=m.request_id,
-                has_bid=m.bid is not None,
-                bid=float(m.bid) if m.bid is not None else 0.0,
-            )
+            extra = self._encoder(msgs.BRIDGE_ACTION_EXECUTION)(hm.BridgeActionExecution.of(m))
             return [
-                ("", msgs.ACTION_EXECUTION, ros),
+                ("", msgs.ACTION_EXECUTION, extra.execution),
                 (BRIDGE_PREFIX, msgs.BRIDGE_ACTION_EXECUTION, extra),
             ]
-        if isinstance(m, hm.ActionExecutionInfo):
-            ros = t[msgs.ACTION_EXECUTION_INFO](
-                status=int(m.status),
-                start_stamp=self.time(m.start_stamp),
-                status_stamp=self.time(m.status_stamp),
-                action_full_name=m.action_full_name,
-                action=m.action,
-                arguments=list(m.arguments),
-                duration=self.duration(m.duration),
-                completion=float(m.completion),
-                message_status=m.message_status,
-            )
-            return [("", msgs.ACTION_EXECUTION_INFO, ros)]
-        if isinstance(m, hm.ActionPerformerStatus):
-            ros = t[msgs.ACTION_PERFORMER_STATUS](
-                status_stamp=self.time(m.status_stamp),
-                state=int(m.state),
-                action=m.action,
-                specialized_arguments=list(m.specialized_arguments),
-                node_name=m.node_name,
-            )
-            return [("", msgs.ACTION_PERFORMER_STATUS, ros)]
         if isinstance(m, hm.ExecutingPlan):
-            plan = self._plan(m.plan)
-            extra = t[msgs.BRIDGE_EXECUTING_PLAN](plan_id=m.plan_id, plan=plan)
-            return [("", msgs.PLAN, plan), (BRIDGE_PREFIX, msgs.BRIDGE_EXECUTING_PLAN, extra)]
-        if isinstance(m, hm.Plan):
-            return [("", msgs.PLAN, self._plan(m))]
-        if isinstance(m, hm.Knowledge):
-            ros = t[msgs.KNOWLEDGE](
-                instances=list(m.instances),
-                predicates=list(m.predicates),
-                functions=list(m.functions),
-                goal=m.goal,
-            )
-            return [("", msgs.KNOWLEDGE, ros)]
+            extra = self._encoder(msgs.BRIDGE_EXECUTING_PLAN)(m)
+            return [("", msgs.PLAN, extra.plan), (BRIDGE_PREFIX, msgs.BRIDGE_EXECUTING_PLAN, extra)]
         if isinstance(m, hm.DotGraph):
-            return [("", msgs.STRING, t[msgs.STRING](data=m.text))]
+            return [("", msgs.STRING, self.store.types[msgs.STRING](data=m.text))]
+        for cls, ros_type in _PLAIN:
+            if isinstance(m, cls):
+                return [("", ros_type, self._encoder(ros_type)(m))]
         return []
 
     def _callback(self, hub_topic: str) -> Callable[[object], None]:

@@ -111,3 +111,22 @@ def test_foreign_samples_are_dropped_with_one_line_naming_topic_and_writer(
             line.startswith(f"{topic}: dropped a sample from writer ") and why in line
             for line in lines
         ), (topic, why, lines)
+
+
+def test_messages_of_another_plan_are_dropped_once_a_plan_runs() -> None:
+    plans: set[str] = set()
+    check = domain_check({"move": 3}, plans)
+    other = hm.ActionExecution(
+        hm.ExecutionType.FINISH, "r1", "move", ("r1", "a", "b"), request_id="theirs/0/2"
+    )
+    assert check(hm.Topics.ACTIONS_HUB, other) is None  # no plan yet: nothing to compare
+    plans.add("mine")
+    assert check(hm.Topics.ACTIONS_HUB, other) == "plan id 'theirs' is not a plan of this executor"
+    ours = hm.ActionExecution(
+        hm.ExecutionType.FINISH, "r1", "move", ("r1", "a", "b"), request_id="mine/1/0"
+    )
+    assert check(hm.Topics.ACTIONS_HUB, ours) is None
+    plan = hm.ExecutingPlan(hm.Plan((hm.PlanItem(0.0, "(move r1 a b)", 1.0),)), "theirs")
+    assert "not a plan of this executor" in (check(hm.Topics.EXECUTING_PLAN, plan) or "")
+    bad_item = hm.ExecutingPlan(hm.Plan((hm.PlanItem(0.0, "(fly r1)", 1.0),)), "mine")
+    assert "unknown action 'fly'" in (check(hm.Topics.EXECUTING_PLAN, bad_item) or "")
