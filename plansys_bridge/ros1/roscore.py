@@ -8,6 +8,7 @@ port (not 11311) and ``ROS_HOME`` so parallel runs never meet.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import shutil
@@ -18,6 +19,7 @@ import tempfile
 import time
 import xmlrpc.client
 from pathlib import Path
+from typing import Any
 
 from plansys_bridge.ros1.errors import MasterUnreachable, Ros1Error
 
@@ -117,12 +119,25 @@ class Roscore:
         process, self.process = self.process, None
         if process is None or process.poll() is not None:
             return
+        # roslaunch runs rosmaster in a process group of its own: ask the master for
+        # its pid first, so it cannot outlive a roslaunch that had to be killed.
+        master_pid = self._master_pid()
         os.killpg(process.pid, signal.SIGINT)
         try:
             process.wait(timeout=15)
         except subprocess.TimeoutExpired:
             os.killpg(process.pid, signal.SIGKILL)
             process.wait()
+        if master_pid is not None:
+            _end(master_pid)
+
+    def _master_pid(self) -> int | None:
+        try:
+            reply: Any = xmlrpc.client.ServerProxy(self.uri).getPid("/roscore")
+            code, _, pid = reply
+        except (OSError, ValueError, TypeError, xmlrpc.client.Error):
+            return None
+        return int(pid) if code == 1 and pid != os.getpid() else None
 
     def close(self) -> None:
         self.stop()
@@ -135,3 +150,20 @@ class Roscore:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _end(pid: int, grace: float = 5.0) -> None:
+    """SIGTERM ``pid`` if it still runs, SIGKILL after ``grace`` seconds."""
+    try:
+        os.kill(pid, signal.SIGTERM)
+    except ProcessLookupError:
+        return
+    deadline = time.monotonic() + grace
+    while time.monotonic() < deadline:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return
+        time.sleep(0.05)
+    with contextlib.suppress(ProcessLookupError):
+        os.kill(pid, signal.SIGKILL)
