@@ -86,7 +86,7 @@ def survey(speedup: float, workdir: Path) -> dict[str, float]:
     result = report.result
     if not report.success or result is None:
         raise SystemExit(f"survey at speedup {speedup:g} failed: {report.summary()}")
-    planned = max(a.time + a.duration for a in result.plans[0].actions)
+    planned = result.plans[0].makespan
     starts = [a.start for a in result.actions if a.start is not None]
     ends = [a.end for a in result.actions if a.end is not None]
     flown = max(ends) - min(starts)
@@ -178,7 +178,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory(prefix="bench_sitl_") as tmp:
         workdir = Path(tmp)
         out["survey"] = {
-            f"x{s:g}": survey(float(s), workdir) for s in args.speedups.split(",") if s
+            f"x{float(s):g}": survey(float(s), workdir) for s in args.speedups.split(",") if s
         }
         out["round_trip"] = round_trips(args.round_trips, workdir)
         out["fault"] = fault_latency(workdir)
