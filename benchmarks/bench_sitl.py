@@ -25,7 +25,6 @@ import json
 import statistics
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -44,7 +43,7 @@ TESTS = Path(__file__).resolve().parents[1] / "tests" / "adapters" / "mavlink"
 sys.path.insert(0, str(TESTS))  # the tests' second ground station and mission helpers
 
 import yaml  # noqa: E402
-from sitl_support import GroundStation, sitl_mission  # noqa: E402
+from sitl_support import GroundStation, finish_cli, sitl_mission, start_cli  # noqa: E402
 
 
 def _instance() -> int:
@@ -139,29 +138,21 @@ def round_trips(n: int, workdir: Path) -> dict[str, Any]:
 
 
 def fault_latency(workdir: Path, speedup: float = 5.0) -> dict[str, float]:
+    """Through ``plansys-bridge run``: HEARTBEAT showing LOITER -> the action's end."""
     sitl = _start(workdir / "fault", speedup)
     try:
         path = sitl_mission("mavlink_copter.yaml", {"uav1": sitl.url}, workdir)
-        data = yaml.safe_load(path.read_text())
-        mission = mission_from_dict(data, source=str(path), base_dir=path.parent)
+        proc = start_cli(path)  # SITL opens SERIAL1 once the adapter is on SERIAL0
         with GroundStation(sitl.gcs_url, "copter") as gcs:
             gcs.stream("GLOBAL_POSITION_INT", 10)
-
-            def inject() -> None:
-                gcs.wait(lambda s: s.north_max > 15 and s.alt > 8, 300, "the first leg")
-                gcs.set_mode("LOITER")
-
-            thread = threading.Thread(target=inject)
-            thread.start()
-            report = run_mission(mission)
-            thread.join()
+            gcs.wait(lambda s: s.north_max > 15 and s.alt > 8, 300, "the first leg")
+            gcs.set_mode("LOITER")
+            report = finish_cli(proc)
             seen = next(t for t, m in gcs.seen.modes if m == "LOITER")
     finally:
         sitl.stop()
-    assert report.result is not None
-    [failed] = [a for a in report.result.actions if a.status.name == "FAILED"]
-    assert failed.end is not None
-    return {"heartbeat_to_finish_ms": (failed.end - seen) * 1000}
+    [end] = [r["end"] for r in report["records"] if r["status"] == "FAILED"]
+    return {"heartbeat_to_finish_ms": (end - seen) * 1000}
 
 
 def main() -> int:
@@ -177,9 +168,11 @@ def main() -> int:
     out: dict[str, Any] = {}
     with tempfile.TemporaryDirectory(prefix="bench_sitl_") as tmp:
         workdir = Path(tmp)
-        out["survey"] = {
-            f"x{float(s):g}": survey(float(s), workdir) for s in args.speedups.split(",") if s
-        }
+        out["survey"] = {}
+        for s in filter(None, args.speedups.split(",")):
+            out["survey"][f"x{float(s):g}"] = row = survey(float(s), workdir)
+            if not args.json:
+                print(f"survey x{float(s):g}: {json.dumps(row)}", flush=True)
         out["round_trip"] = round_trips(args.round_trips, workdir)
         out["fault"] = fault_latency(workdir)
     if args.json:
