@@ -28,6 +28,7 @@ SUBCOMMANDS = (
     "bridge",
     "report",
     "monitor",
+    "serve",
 )
 
 

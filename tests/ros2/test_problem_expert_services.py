@@ -1,9 +1,9 @@
 """PlanSys2's problem expert services, called by an independent ROS 2 service client.
 
-The client below is a plain Cyclone DDS program. Its types are typed here from the
-upstream texts, not taken from the project: plansys2_msgs/srv/GetProblemInstances.srv,
-AffectNode.srv, msg/Param.msg, msg/Node.msg (ros2_planning_system, rolling) and
-std_msgs/msg/Empty.msg; the request/reply framing is rmw_cyclonedds' (rmw_node.cpp:
+The client below is a plain Cyclone DDS program. Its types are typed in the tests from
+the upstream texts, not taken from the project: plansys2_msgs/srv/GetProblemInstances.srv
+and AffectNode.srv here (ros2_planning_system, rolling), the messages in
+ros2_upstream.py. The request/reply framing is rmw_cyclonedds' (rmw_node.cpp:
 ``cdds_request_header_t {uint64_t guid; int64_t seq;}`` before the message, topics
 ``rq/<service>Request`` / ``rr/<service>Reply``, the client's writer handle as guid).
 """
@@ -18,14 +18,10 @@ import pytest
 
 pytest.importorskip("cyclonedds", reason="cyclonedds (extra 'dds') is not installed")
 
-from cyclonedds.core import Policy, Qos
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import float64, int64, sequence, uint8, uint32, uint64
-from cyclonedds.pub import DataWriter
-from cyclonedds.sub import DataReader
-from cyclonedds.topic import Topic
-from cyclonedds.util import duration
+from cyclonedds.idl.types import int64, sequence, uint64
+from ros2_upstream import PREDICATE, Empty_, Node_, Param_, RawClient
 
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.pddl.parser import parse_domain_files
@@ -37,35 +33,7 @@ pytestmark = [pytest.mark.timeout(60), pytest.mark.usefixtures("no_leaks")]
 DOMAIN = Path(__file__).resolve().parents[2] / "configs" / "pddl" / "flat_navigation.pddl"
 
 
-# -- upstream types, typed from the .msg/.srv texts ------------------------------------
-@dataclass
-class Empty_(IdlStruct, typename="std_msgs::msg::dds_::Empty_"):
-    structure_needs_at_least_one_member: uint8 = 0
-
-
-@dataclass
-class Param_(IdlStruct, typename="plansys2_msgs::msg::dds_::Param_"):
-    name: str = ""
-    type: str = ""
-    sub_types: sequence[str] = field(default_factory=list)
-
-
-@dataclass
-class Node_(IdlStruct, typename="plansys2_msgs::msg::dds_::Node_"):
-    node_type: uint8 = 0
-    expression_type: uint8 = 0
-    modifier_type: uint8 = 0
-    node_id: uint32 = 0
-    children: sequence[uint32] = field(default_factory=list)
-    name: str = ""
-    parameters: sequence[Param_] = field(default_factory=list)
-    value: float64 = 0.0
-    negate: bool = False
-
-
-PREDICATE = 5  # Node.msg: uint8 PREDICATE = 5
-
-
+# -- the services' own types, typed from GetProblemInstances.srv and AffectNode.srv ----
 @dataclass
 class GetProblemInstances_Request_(
     IdlStruct, typename="plansys2_msgs::srv::dds_::GetProblemInstances_Request_"
@@ -99,40 +67,6 @@ class AffectNode_Response_(IdlStruct, typename="plansys2_msgs::srv::dds_::Affect
     seq: int64 = 0
     success: bool = False
     error_info: str = ""
-
-
-SERVICES_QOS = Qos(
-    Policy.Reliability.Reliable(duration(seconds=1)),
-    Policy.History.KeepLast(10),
-    Policy.Durability.Volatile,
-    Policy.DataRepresentation(use_cdrv0_representation=True),
-)
-
-
-class RawClient:
-    """A ROS 2 service client as rmw_cyclonedds frames one, on its own participant."""
-
-    def __init__(self, dp: Any, service: str, request_type: type, reply_type: type) -> None:
-        self.writer = DataWriter(dp, Topic(dp, f"rq{service}Request", request_type), SERVICES_QOS)
-        self.reader = DataReader(dp, Topic(dp, f"rr{service}Reply", reply_type), SERVICES_QOS)
-        self.guid = self.writer.instance_handle & 0xFFFF_FFFF_FFFF_FFFF
-        self.request_type = request_type
-        self.seq = 0
-
-    async def call(self, **fields: Any) -> Any:
-        async with asyncio.timeout(10):
-            while (
-                self.writer.get_publication_matched_status().current_count == 0
-                or self.reader.get_subscription_matched_status().current_count == 0
-            ):
-                await asyncio.sleep(0.01)
-            self.seq += 1
-            self.writer.write(self.request_type(guid=self.guid, seq=self.seq, **fields))
-            while True:
-                for sample in self.reader.take(N=10):
-                    if sample.guid == self.guid and sample.seq == self.seq:
-                        return sample
-                await asyncio.sleep(0.01)
 
 
 def knowledge() -> ProblemExpert:
