@@ -103,7 +103,8 @@ def make_transport(
     role: str = "executor",
     plan_ids: Set[str] | None = None,
 ) -> Transport:
-    """The hub transport the mission's ``transport:`` names (DDS imported only then).
+    """The hub transport the mission's ``transport:`` names (DDS imported only then),
+    signed with the fleet key when ``auth:`` gives one (:mod:`plansys_bridge.hub.auth`).
 
     With ``domain``, a DDS transport drops received messages about actions the domain
     does not have (:func:`~plansys_bridge.hub.dds_checks.domain_check`), and with
@@ -111,6 +112,19 @@ def make_transport(
     execute. Over DDS the
     process shows to ROS 2 tools as the node ``<mission name>_<role>``.
     """
+    transport = _bare_transport(mission, domain, role, plan_ids)
+    if mission.auth is None:
+        return transport
+    from plansys_bridge.hub.auth import AuthTransport, load_key
+
+    with _keyed(mission, "auth.key_file"):
+        key = load_key(mission.resolve(mission.auth.key_file))
+    return AuthTransport(transport, key, window=mission.auth.window)
+
+
+def _bare_transport(
+    mission: MissionConfig, domain: Domain | None, role: str, plan_ids: Set[str] | None
+) -> Transport:
     if mission.transport.kind == "dds":
         try:
             from plansys_bridge.hub.dds import DdsTransport

@@ -111,6 +111,15 @@ class PlannerConfig(_Strict):
     """A solver that errs or times out hands over to the next listed one."""
 
 
+class AuthConfig(_Strict):
+    """A fleet key: the hub accepts auction messages and heartbeats only when signed
+    with it (:mod:`plansys_bridge.hub.auth`)."""
+
+    key_file: str
+    window: float = Field(30.0, gt=0)
+    """Seconds a signed message's timestamp may differ from the receiver's clock."""
+
+
 class KnowledgeConfig(_Strict):
     """Initial knowledge given inline instead of (or on top of) a problem file."""
 
@@ -155,6 +164,8 @@ class MissionConfig(_Strict):
     goal: str | None = None
     performers: list[PerformerEntry] = Field(min_length=1)
     transport: TransportConfig = Field(default_factory=TransportConfig)
+    auth: AuthConfig | None = None
+    """A fleet key: only signed auction messages and heartbeats are accepted."""
     planner: PlannerConfig = Field(default_factory=PlannerConfig)
     clock: ClockConfig = Field(default_factory=ClockConfig)
     replanning: dict[str, Any] = Field(default_factory=dict)

@@ -69,9 +69,15 @@ async def _serve(
     signals = (signal.SIGINT, signal.SIGTERM)
     for sig in signals:
         loop.add_signal_handler(sig, stop.set)
-    node = Ros2Node(domain_id, config=loopback_config(domain_id), name="plansys_bridge")
+    node: Ros2Node | None = None
     try:
         async with MissionSession(mission, domain, knowledge, clock) as session:
+            # Cyclone opens a domain once per process: share the hub's configuration.
+            transport = session.hub.transport
+            config = getattr(transport, "config", None)
+            if getattr(transport, "domain_id", None) != domain_id or not isinstance(config, str):
+                config = loopback_config(domain_id)
+            node = Ros2Node(domain_id, config=config, name="plansys_bridge")
             await node.start()
             executor = Executor(session.hub, domain, knowledge, planner, mission.executor_options())
             services = [
@@ -95,7 +101,8 @@ async def _serve(
                 for service_set in services:
                     await service_set.close()
     finally:
-        await node.close()
+        if node is not None:
+            await node.close()
         for sig in signals:
             loop.remove_signal_handler(sig)
     print("stopped", flush=True)

@@ -32,6 +32,7 @@ from cyclonedds.idl import IdlStruct
 
 from plansys_bridge.errors import HubError
 from plansys_bridge.hub import messages as hm
+from plansys_bridge.hub.auth import SIGNED_TOPIC, SignedMessage
 from plansys_bridge.hub.dds_convert import (
     Decoder,
     from_idl_seconds,
@@ -70,6 +71,7 @@ KNOWLEDGE = "plansys2_msgs/msg/Knowledge"
 STRING = "std_msgs/msg/String"
 BRIDGE_ACTION_EXECUTION = "plansys_bridge_msgs/msg/ActionExecution"
 BRIDGE_EXECUTING_PLAN = "plansys_bridge_msgs/msg/ExecutingPlan"
+BRIDGE_SIGNED = "plansys_bridge_msgs/msg/Signed"
 
 
 def dds_topic_name(hub_topic: str, *, project: bool = False) -> str:
@@ -208,6 +210,27 @@ ROUTES: dict[str, Route] = {
             (hm.Knowledge,),
             (KNOWLEDGE, hub_decoder(hm.Knowledge, KNOWLEDGE)),
             _plain(KNOWLEDGE),
+        ),
+        _route(
+            SIGNED_TOPIC,
+            (SignedMessage,),
+            (
+                BRIDGE_SIGNED,
+                lambda x: SignedMessage(
+                    x.topic, x.sender, int(x.counter), float(x.stamp), x.payload, bytes(x.mac)
+                ),
+            ),
+            lambda m: (
+                dds_type(BRIDGE_SIGNED)(
+                    topic=m.topic,
+                    sender=m.sender,
+                    counter=m.counter,
+                    stamp=m.stamp,
+                    payload=m.payload,
+                    mac=list(m.mac),
+                ),
+                None,
+            ),
         ),
         _route(
             hm.Topics.DOT_GRAPH,

@@ -49,5 +49,6 @@ TOPIC_QOS: dict[str, TopicQos] = {
     Topics.EXECUTING_PLAN: TopicQos(100, transient_local=True),
     Topics.KNOWLEDGE: TopicQos(100, transient_local=True),
     Topics.DOT_GRAPH: TopicQos(1),
+    Topics.SIGNED: TopicQos(100),  # the signed auction messages, as actions_hub
 }
 """Writer QoS by hub topic, as PlanSys2 sets it."""

@@ -160,3 +160,5 @@ class Topics:
     EXECUTING_PLAN = "executing_plan"
     KNOWLEDGE = "problem_expert/knowledge"
     DOT_GRAPH = "dot_graph"
+    SIGNED = "plansys_bridge/signed"
+    """Auction messages and heartbeats signed with a fleet key (hub/auth.py)."""
