@@ -13,18 +13,15 @@ domain is the mission's ``transport.domain_id`` when it runs on DDS, else
 from __future__ import annotations
 
 import argparse
-import asyncio
 import contextlib
 import signal
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from plansys_bridge.cli.options import check_positive
-from plansys_bridge.clock import WallClock, run
-from plansys_bridge.execution.executor import Executor
-from plansys_bridge.mission import MissionSession, build_knowledge, in_mission_file
-from plansys_bridge.mission_config import MissionConfig, load_mission
-from plansys_bridge.pddl.parser import parse_domain_files
-from plansys_bridge.planning.planner import Planner
+
+if TYPE_CHECKING:  # imported when the command runs: --help stays light
+    from plansys_bridge.clock import WallClock
+    from plansys_bridge.mission_config import MissionConfig
 
 
 def register(sub: Any) -> None:
@@ -41,6 +38,10 @@ def register(sub: Any) -> None:
 
 
 def handle(args: argparse.Namespace) -> int:
+    from plansys_bridge.clock import WallClock, run
+    from plansys_bridge.mission import in_mission_file
+    from plansys_bridge.mission_config import load_mission
+
     check_positive(args.duration, "--duration")
     mission = load_mission(args.mission)
     domain_id = args.domain_id
@@ -55,7 +56,13 @@ def handle(args: argparse.Namespace) -> int:
 async def _serve(
     mission: MissionConfig, clock: WallClock, domain_id: int, duration: float | None
 ) -> None:
+    import asyncio
+
+    from plansys_bridge.execution.executor import Executor
     from plansys_bridge.hub.dds_config import loopback_config
+    from plansys_bridge.mission import MissionSession, build_knowledge
+    from plansys_bridge.pddl.parser import parse_domain_files
+    from plansys_bridge.planning.planner import Planner
     from plansys_bridge.ros2.domain_planner_services import serve_domain_expert, serve_planner
     from plansys_bridge.ros2.executor_action import ExecutePlanServer
     from plansys_bridge.ros2.node import Ros2Node
