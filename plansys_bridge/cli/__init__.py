@@ -29,6 +29,7 @@ SUBCOMMANDS = (
     "report",
     "monitor",
     "serve",
+    "new_adapter",
 )
 
 

@@ -58,7 +58,8 @@ class PerformerContract:
     failing_goal: ClassVar[Call | None] = None
     """An action call it fails (with a reason), if it has one."""
     bad_settings: ClassVar[list[tuple[dict[str, Any], str]]] = []
-    """Changes to ``entry`` that are configuration errors, with the key each names."""
+    """Changes to ``entry`` that are configuration errors, with the key each names
+    (``""``: the entry as a whole, as ``from_config`` reports an ``__init__`` error)."""
     cancel_within: ClassVar[float] = 5.0
     """Seconds (mission time) from CANCEL until the performer is idle again."""
     action_timeout: ClassVar[float] = 600.0
@@ -233,7 +234,8 @@ class PerformerContract:
             entry = {k: v for k, v in {**self.entry, **change}.items() if v is not None}
             with pytest.raises(ConfigError) as err:
                 self.build(self.make_context(hub), entry)
-            assert err.value.key == f"performer.{key}", str(err.value)
+            expected = f"performer.{key}" if key else "performer"
+            assert err.value.key == expected, str(err.value)
 
 
 def _collect(into: list[ActionExecution], node: str) -> Callable[[object], None]:
