@@ -29,7 +29,7 @@ SUBCOMMANDS = (
     "report",
     "monitor",
     "serve",
-    "new_adapter",
+    "new-adapter",
 )
 
 
@@ -41,7 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"plansys-bridge {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in SUBCOMMANDS:
-        module = importlib.import_module(f"plansys_bridge.cli.{name}_cmd")
+        module = importlib.import_module(f"plansys_bridge.cli.{name.replace('-', '_')}_cmd")
         module.register(sub)
     for command in sub.choices.values():
         add_verbosity(command)
