@@ -17,12 +17,16 @@ from typing import Any
 from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.interfaces.dds import dds_type, ros2_constants
 from plansys_bridge.pddl.model import (
+    AddEffect,
     And,
+    AndEffect,
     Atom,
     BinaryOp,
     Compare,
     Condition,
+    DeleteEffect,
     DurationRef,
+    Effect,
     Equals,
     Exists,
     FluentRef,
@@ -32,6 +36,7 @@ from plansys_bridge.pddl.model import (
     Negate,
     Not,
     Number,
+    NumericEffect,
     NumExpr,
     Or,
 )
@@ -40,6 +45,7 @@ from plansys_bridge.pddl.writer import write_number
 __all__ = [
     "atom_node",
     "condition_tree",
+    "effect_tree",
     "fluent_node",
     "node_text",
     "param",
@@ -139,11 +145,54 @@ def _text(nodes: list[Any], index: int, seen: set[int]) -> str:
     return f"(not {text})" if node.negate else text
 
 
-def condition_tree(cond: Condition) -> Any:
-    """A condition as PlanSys2's Tree (node 0 the root)."""
+def condition_tree(cond: Condition, names: dict[str, str] | None = None) -> Any:
+    """A condition as PlanSys2's Tree (node 0 the root; empty for no condition).
+
+    ``names`` renames variables, as PlanSys2's domain expert calls an action's
+    parameters ``?0``, ``?1``... or the objects a client asked for.
+    """
     nodes: list[Any] = []
-    _add_condition(nodes, cond)
+    if cond != And(()):
+        _add_condition(nodes, cond)
+    return _tree(nodes, names or {})
+
+
+def effect_tree(effect: Effect, names: dict[str, str] | None = None) -> Any:
+    """An effect as PlanSys2's Tree: AND, NOT of PREDICATE, FUNCTION_MODIFIER nodes.
+
+    PlanSys2's Tree has no node for conditional or universal effects, so those are
+    refused with a KnowledgeError rather than sent half.
+    """
+    nodes: list[Any] = []
+    if effect != AndEffect(()):
+        _add_effect(nodes, effect)
+    return _tree(nodes, names or {})
+
+
+def _tree(nodes: list[Any], names: dict[str, str]) -> Any:
+    for node in nodes:
+        for p in node.parameters:
+            p.name = names.get(p.name, p.name)
+        if node.node_type == _N["CONSTANT"]:
+            node.name = names.get(node.name, node.name)
     return dds_type("plansys2_msgs/msg/Tree")(nodes=nodes)
+
+
+def _add_effect(nodes: list[Any], effect: Effect) -> int:
+    if isinstance(effect, AddEffect):
+        return _add_condition(nodes, effect.atom)
+    if isinstance(effect, DeleteEffect):
+        return _add_condition(nodes, Not(effect.atom))
+    if isinstance(effect, AndEffect):
+        node = _new(nodes, node_type=_N["AND"])
+        node.children = [_add_effect(nodes, e) for e in effect.effects]
+        return int(node.node_id)
+    if isinstance(effect, NumericEffect):
+        kind = _N[effect.op.replace("-", "_").upper()]
+        node = _new(nodes, node_type=_N["FUNCTION_MODIFIER"], modifier_type=kind)
+        node.children = [_add_expr(nodes, effect.fluent), _add_expr(nodes, effect.value)]
+        return int(node.node_id)
+    raise KnowledgeError(f"{type(effect).__name__} has no PlanSys2 Tree form")
 
 
 def _new(nodes: list[Any], **fields: Any) -> Any:
@@ -198,7 +247,7 @@ def _add_expr(nodes: list[Any], expr: NumExpr) -> int:
     if isinstance(expr, Negate):
         return _add_expr(nodes, BinaryOp("-", Number(0.0), expr.operand))
     if isinstance(expr, DurationRef):
-        raise KnowledgeError("?duration cannot appear in a goal")
+        raise KnowledgeError("?duration has no PlanSys2 Tree form (it can appear in no goal)")
     node = _new(nodes, node_type=_N["EXPRESSION"], expression_type=_N[_ARITH[expr.op]])
     node.children = [_add_expr(nodes, expr.left), _add_expr(nodes, expr.right)]
     return int(node.node_id)
