@@ -341,8 +341,12 @@ def test_goal_succeeds_with_feedback_from_distance_remaining() -> None:
     ((goal_x, goal),) = [(g["x"], g) for g in server.goals.values()]
     assert goal_x == 4.0 and goal["status"] == SUCCEEDED
     feedback = [m.completion for m in seen if m.type is ExecutionType.FEEDBACK]
-    # 3, 2, 1, 0 m left of at most 3 m: 0, 1/3, 2/3, 1
-    assert feedback == pytest.approx([0.0, 1 / 3, 2 / 3, 1.0], abs=1e-6)
+    # 3, 2, 1, 0 m left of at most 3 m: 0, 1/3, 2/3, 1 (a loaded machine may merge or
+    # repeat a sample, never invent one or go backwards)
+    steps = [0.0, 1 / 3, 2 / 3, 1.0]
+    assert feedback == sorted(feedback), feedback
+    assert all(min(abs(f - s) for s in steps) < 1e-6 for f in feedback), feedback
+    assert any(abs(f - 1 / 3) < 1e-6 or abs(f - 2 / 3) < 1e-6 for f in feedback), feedback
 
 
 def test_aborted_goal_fails_with_the_result_code() -> None:
