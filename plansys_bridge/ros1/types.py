@@ -2,12 +2,12 @@
 
 TCPROS peers refuse a connection whose md5sum differs from theirs, and rospy
 rebuilds nothing from ``message_definition`` but tools (rosbag, rqt) do, so both
-must be what genmsg would produce. rosbags' ROS 1 Noetic typestore already holds
-std_msgs, geometry_msgs, nav_msgs, sensor_msgs and actionlib_msgs and computes
-both the way genmsg does; the types it lacks (move_base_msgs, tf2_msgs) are read
-from the upstream ``.msg``/``.action`` texts vendored under
-``plansys_bridge/interfaces/ros1`` and further custom types can be registered from
-``.msg`` text.
+must be what genmsg would produce; rosbags computes both the way genmsg does. The
+types the bridge uses (std_msgs, geometry_msgs, nav_msgs, actionlib_msgs,
+move_base_msgs, tf2_msgs) are read from the upstream ``.msg``/``.action`` texts
+vendored under ``plansys_bridge/interfaces/ros1``, so those texts are what peers
+see; the rest of rosbags' ROS 1 Noetic store (sensor_msgs, ...) is added after
+them, and further custom types can be registered from ``.msg`` text.
 
 Names are accepted in ROS 1 form (``std_msgs/String``) and ROS 2 form
 (``std_msgs/msg/String``); the store keys on the ROS 2 form.
@@ -112,9 +112,11 @@ class Ros1Types:
     """One typestore with the ROS 1 definitions, and the TCPROS view of each type."""
 
     def __init__(self) -> None:
-        self.store: Typestore = get_typestore(Stores.ROS1_NOETIC)
-        self.register_texts(_vendored_texts(INTERFACES_DIR))
         self._defs: dict[str, tuple[str, str]] = {}
+        self.store: Typestore = get_typestore(Stores.EMPTY)
+        self.register_texts(_vendored_texts(INTERFACES_DIR))
+        noetic = get_typestore(Stores.ROS1_NOETIC).fielddefs
+        self.store.register({k: v for k, v in noetic.items() if k not in self.store.fielddefs})
 
     @classmethod
     @functools.cache
@@ -134,8 +136,7 @@ class Ros1Types:
             self.store.register(types)
         except Exception as exc:
             raise Ros1Error(f"cannot register message types: {exc}") from exc
-        if hasattr(self, "_defs"):
-            self._defs.clear()
+        self._defs.clear()
 
     def known(self, name: str) -> bool:
         return store_name(name) in self.store.fielddefs
