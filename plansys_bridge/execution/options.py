@@ -18,11 +18,12 @@ from plansys_bridge.hub.auction import AuctionPolicy
 if TYPE_CHECKING:
     import py_trees
 
-    from plansys_bridge.execution.tree_builder import ActionNodes
-
-ActionTemplate = Callable[["ActionNodes"], "py_trees.behaviour.Behaviour"]
-"""Builds one action's subtree from the standard behaviours an :class:`ActionNodes`
-hands out (``nodes.default()`` is the standard subtree)."""
+ActionTemplate = Callable[[Any], "py_trees.behaviour.Behaviour"]
+"""Builds one action's subtree from the standard behaviours an
+:class:`~plansys_bridge.execution.tree_builder.ActionNodes` hands out
+(``nodes.default()`` is the standard subtree). The argument is typed ``Any`` here
+because the nodes need a running plan's context, which needs these options: naming
+the class would make the options and the behaviours import each other."""
 
 __all__ = ["ActionTemplate", "ExecutorOptions"]
 

@@ -27,32 +27,46 @@ transitive reduction keeps only the edges a reader needs.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from types import MappingProxyType
-from typing import Literal, TypeAlias
+from typing import TypeAlias
 
 import networkx as nx
 
 from plansys_bridge.errors import ExecutionError
+from plansys_bridge.execution.effect_access import (
+    expr_fluents,
+    ground_fluent,
+    numeric_class,
+    walk_effect,
+)
+from plansys_bridge.execution.happening_order import (
+    happening_order,
+    point_of,
+    transitive_reduction,
+)
+from plansys_bridge.execution.orderings import (
+    END,
+    GROUND,
+    START,
+    Kind,
+    Ordering,
+    PlanGraphError,
+    Point,
+    UnexplainedRequirement,
+    When,
+)
+from plansys_bridge.execution.requirement_text import condition_text, describe_unmet
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import (
-    TRUE,
     And,
-    AndEffect,
     Atom,
-    BinaryOp,
     Condition,
     Domain,
     Effect,
-    FluentRef,
-    ForallEffect,
-    Negate,
     NumericEffect,
-    NumExpr,
     WhenEffect,
-    is_variable,
 )
 from plansys_bridge.planning.plan import Plan, PlanStep
 
@@ -70,72 +84,8 @@ __all__ = [
     "describe_unmet",
 ]
 
-GROUND: Mapping[str, str] = MappingProxyType({})
-"""Bindings for a ground action's conditions and effects: none, the evaluator
-substituted its arguments already (passing them again only costs time)."""
-
-Point: TypeAlias = Literal["start", "end"]
-START: Point = "start"
-END: Point = "end"
-
-When: TypeAlias = Literal["at start", "over all", "at end"]
-Kind: TypeAlias = Literal["causal", "threat", "effects"]
-
 _Var: TypeAlias = tuple[str, object]
 """("a", Atom) for a ground atom, ("f", FluentKey) for a numeric fluent."""
-
-
-class PlanGraphError(ExecutionError):
-    """A plan's requirement is explained neither by the knowledge nor by an earlier action.
-
-    ``step`` is the index of the action in the plan, ``action`` its text, ``when``
-    the condition's time specifier and ``requirement`` the unmet condition.
-    """
-
-    def __init__(self, problems: Sequence[UnexplainedRequirement]) -> None:
-        self.problems = tuple(problems)
-        first = self.problems[0]
-        self.step = first.step
-        self.action = first.action
-        self.when = first.when
-        self.requirement = first.requirement
-        lines = [str(p) for p in self.problems[:10]]
-        if len(self.problems) > 10:
-            lines.append(f"... and {len(self.problems) - 10} more")
-        super().__init__("plan rejected: " + "; ".join(lines))
-
-
-@dataclass(frozen=True)
-class UnexplainedRequirement:
-    """One requirement of one action that nothing makes true when it is needed."""
-
-    step: int
-    action: str
-    when: When
-    requirement: str
-    detail: str = ""
-
-    def __str__(self) -> str:
-        text = f"step {self.step} {self.action}: {self.when} requirement {self.requirement} "
-        return text + (self.detail or "is not explained by the knowledge or an earlier action")
-
-
-@dataclass(frozen=True)
-class Ordering:
-    """``source``'s ``source_point`` must happen before ``target``'s ``target_point``."""
-
-    source: int
-    source_point: Point
-    target: int
-    target_point: Point
-    kind: Kind
-    subject: str
-    """The atom or fluent the ordering protects, e.g. ``(robot_at r1 kitchen)``."""
-
-    @property
-    def reason(self) -> str:
-        verb = {"causal": "needs", "threat": "must not break", "effects": "conflicting effects on"}
-        return f"{self.source_point}->{self.target_point} {verb[self.kind]} {self.subject}"
 
 
 # ---------------------------------------------------------------- the result
@@ -291,20 +241,9 @@ class _Builder:
                 raise ExecutionError(f"plan step {i} {step.text}: {exc}") from exc
         return tuple(out)
 
-    def _happenings(self) -> list[int]:
-        def key(h: int) -> tuple[float, int, int, int]:
-            step = self.steps[h // 2]
-            if h % 2 == 0:
-                return (round(step.time, 6), 1, h // 2, 0)
-            if step.duration <= 0:
-                return (round(step.time, 6), 1, h // 2, 1)
-            return (round(step.time + step.duration, 6), 0, h // 2, 1)
-
-        return sorted(range(2 * len(self.steps)), key=key)
-
     def build(self, *, reduce: bool) -> PlanGraph:
         ground = self._ground()
-        order = self._happenings()
+        order = happening_order(self.steps)
         self.pos = {h: p for p, h in enumerate(order)}
         state = self.initial
         open_over_all: dict[int, set[_Var]] = {}
@@ -382,15 +321,15 @@ class _Builder:
         read: set[_Var] = set()
         # conditions of conditional effects and values of numeric effects are reads
         ops: dict[FluentKey, str] = {}
-        for sub, binds in _walk_effect(effect, GROUND, self.ev, state):
+        for sub, binds in walk_effect(effect, GROUND, self.ev, state):
             if isinstance(sub, WhenEffect):
                 read |= self._condition_vars(sub.condition, binds, state)
             elif isinstance(sub, NumericEffect):
-                key = _ground_fluent(sub.fluent, binds)
+                key = ground_fluent(sub.fluent, binds)
                 if key is not None:
-                    cls = _numeric_class(sub.op)
+                    cls = numeric_class(sub.op)
                     ops[key] = cls if ops.get(key, cls) == cls else "assign"
-                read |= {("f", k) for k in _expr_fluents(sub.value, binds)}
+                read |= {("f", k) for k in expr_fluents(sub.value, binds)}
         for var in read:
             self._read(var, h, h)
         for atom in deletes - adds:
@@ -482,7 +421,7 @@ class _Builder:
         succ: dict[int, list[int]] = {}
         for src, dst in self.edges:
             succ.setdefault(src, []).append(dst)
-        kept = _transitive_reduction(order, succ, self.pos) if reduce else set(self.edges)
+        kept = transitive_reduction(order, succ, self.pos) if reduce else set(self.edges)
         orderings: list[Ordering] = []
         start_waits: list[list[tuple[int, Point]]] = [[] for _ in range(n)]
         end_waits: list[list[tuple[int, Point]]] = [[] for _ in range(n)]
@@ -491,7 +430,7 @@ class _Builder:
             graph.add_node(i, action=step.text, time=step.time, duration=step.duration)
         for src, dst in sorted(kept, key=lambda e: (self.pos[e[1]], self.pos[e[0]])):
             kind, subject = self.edges[(src, dst)]
-            o = Ordering(src // 2, _point(src), dst // 2, _point(dst), kind, subject)
+            o = Ordering(src // 2, point_of(src), dst // 2, point_of(dst), kind, subject)
             orderings.append(o)
             (end_waits if dst % 2 else start_waits)[dst // 2].append((o.source, o.source_point))
             if graph.has_edge(o.source, o.target):
@@ -526,133 +465,6 @@ class _Builder:
             _end_waits=[tuple(w) for w in end_waits],
             _order=step_order,
         )
-
-
-def _point(h: int) -> Point:
-    return END if h % 2 else START
-
-
-def _transitive_reduction(
-    order: list[int], succ: dict[int, list[int]], pos: Mapping[int, int]
-) -> set[tuple[int, int]]:
-    """Drop every edge implied by a longer path; each action's start->end is implicit.
-
-    Reachability is kept as Python integers used as bit sets over plan positions,
-    so a 5,000-action plan (10,000 happenings) reduces in well under a second.
-    """
-    reach: dict[int, int] = {}
-    kept: set[tuple[int, int]] = set()
-    for h in reversed(order):
-        targets = list(succ.get(h, ()))
-        if h % 2 == 0:
-            targets.append(h + 1)  # own end, implicit
-        covered = 0
-        for t in targets:
-            covered |= reach.get(t, 0)
-        mine = covered
-        for t in targets:
-            bit = 1 << pos[t]
-            mine |= bit
-            if (t != h + 1 or h % 2) and not covered & bit:
-                kept.add((h, t))
-        reach[h] = mine
-    return kept
-
-
-# ---------------------------------------------------------------- helpers
-
-
-def _numeric_class(op: str) -> str:
-    if op in ("increase", "decrease"):
-        return "add"
-    if op in ("scale-up", "scale-down"):
-        return "mul"
-    return "assign"
-
-
-def _walk_effect(
-    effect: Effect, bindings: Mapping[str, str], ev: Evaluator, state: State
-) -> Iterator[tuple[Effect, Mapping[str, str]]]:
-    """Sub-effects with their bindings; a ``forall`` is expanded over the objects of
-    its variables' types in ``state`` (as the evaluator applies it)."""
-    if isinstance(effect, AndEffect):
-        for sub in effect.effects:
-            yield from _walk_effect(sub, bindings, ev, state)
-    elif isinstance(effect, WhenEffect):
-        yield effect, bindings
-        yield from _walk_effect(effect.effect, bindings, ev, state)
-    elif isinstance(effect, ForallEffect):
-        for found in ev.satisfying_bindings(TRUE, state, effect.variables, bindings):
-            yield from _walk_effect(effect.effect, {**bindings, **found}, ev, state)
-    else:
-        yield effect, bindings
-
-
-def _ground_fluent(ref: FluentRef, bindings: Mapping[str, str]) -> FluentKey | None:
-    args = tuple(bindings.get(a, a) if is_variable(a) else a for a in ref.args)
-    if any(is_variable(a) for a in args):
-        return None
-    return (ref.name, args)
-
-
-def _expr_fluents(expr: NumExpr, bindings: Mapping[str, str]) -> set[FluentKey]:
-    if isinstance(expr, FluentRef):
-        key = _ground_fluent(expr, bindings)
-        return {key} if key is not None else set()
-    if isinstance(expr, BinaryOp):
-        return _expr_fluents(expr.left, bindings) | _expr_fluents(expr.right, bindings)
-    if isinstance(expr, Negate):
-        return _expr_fluents(expr.operand, bindings)
-    return set()
-
-
-def _conjuncts(cond: Condition) -> list[Condition]:
-    if isinstance(cond, And):
-        out: list[Condition] = []
-        for sub in cond.operands:
-            out.extend(_conjuncts(sub))
-        return out
-    return [cond]
-
-
-def describe_unmet(
-    evaluator: Evaluator,
-    cond: Condition,
-    state: State,
-    bindings: Mapping[str, str],
-    duration: float | None = None,
-) -> str:
-    """The conjuncts of ``cond`` that do not hold in ``state``, as ground PDDL text
-    (the whole condition if it fails as a whole)."""
-    failing = [c for c in _conjuncts(cond) if not evaluator.holds(c, state, bindings, duration)]
-    return " ".join(condition_text(c, bindings) for c in (failing or [cond]))
-
-
-def condition_text(cond: Condition, bindings: Mapping[str, str]) -> str:
-    """``cond`` as PDDL text with ``bindings`` substituted for its variables."""
-    from plansys_bridge.pddl.writer import write_condition
-
-    text = write_condition(cond)
-    for var, value in sorted(bindings.items(), key=lambda kv: -len(kv[0])):
-        text = _replace_var(text, var, value)
-    return text
-
-
-def _replace_var(text: str, var: str, value: str) -> str:
-    out: list[str] = []
-    i = 0
-    n = len(var)
-    while True:
-        j = text.find(var, i)
-        if j < 0:
-            out.append(text[i:])
-            return "".join(out)
-        end = j + n
-        if end < len(text) and (text[end].isalnum() or text[end] in "-_"):
-            out.append(text[i:end])
-        else:
-            out.append(text[i:j] + value)
-        i = end
 
 
 def _var_text(var: _Var) -> str:

@@ -26,18 +26,17 @@ from py_trees.common import Status
 from plansys_bridge.errors import ExecutionError
 from plansys_bridge.execution.behaviours import (
     ActionBranch,
-    ActionRuntime,
     ApplyAtEndEffect,
     ApplyAtStartEffect,
     CheckAtEndReq,
     CheckOverAllReq,
     CheckTimeout,
     ExecuteAction,
-    PlanContext,
     WaitAtStartReq,
     WaitForPredecessors,
 )
-from plansys_bridge.execution.plan_graph import END, START
+from plansys_bridge.execution.orderings import END, START
+from plansys_bridge.execution.plan_context import ActionRuntime, PlanContext
 from plansys_bridge.knowledge.evaluation import GroundAction
 
 __all__ = ["ActionNodes", "PlanRoot", "TemplateError", "build_tree", "default_template"]

@@ -1,0 +1,377 @@
+"""The run-time state the behaviours of one running plan share.
+
+Each action has an :class:`ActionRuntime` (which of its happenings took place, its
+record, why it stopped); the :class:`PlanContext` holds them all with the hub, the
+knowledge and the options, keeps the records, publishes ``ActionExecutionInfo``
+and decides which branches are worth ticking. :class:`EffectDelta` remembers what
+an at-start effect changed so a halted action can be undone safely.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import heapq
+import logging
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from plansys_bridge.errors import PlansysBridgeError
+from plansys_bridge.execution.options import ExecutorOptions
+from plansys_bridge.execution.orderings import END, GROUND, START, Point
+from plansys_bridge.execution.plan_graph import PlanGraph
+from plansys_bridge.execution.requirement_text import describe_unmet
+from plansys_bridge.execution.results import ActionRecord
+from plansys_bridge.hub.auction import ActionClient, ActionOutcome
+from plansys_bridge.hub.hub import Hub
+from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, Topics
+from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
+from plansys_bridge.knowledge.state import FluentKey, State
+from plansys_bridge.pddl.model import Atom, Condition, Effect, FluentRef, FluentValue
+from plansys_bridge.planning.plan import PlanStep
+
+if TYPE_CHECKING:
+    from plansys_bridge.knowledge.problem_expert import ProblemExpert
+
+__all__ = ["ActionRuntime", "EffectDelta", "PlanContext"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class EffectDelta:
+    """What applying an effect actually changed, so it can be undone safely."""
+
+    added: tuple[Atom, ...] = ()
+    deleted: tuple[Atom, ...] = ()
+    fluents: tuple[tuple[FluentKey, float | None, float], ...] = ()
+    """(key, old value or None, new value)."""
+
+    @classmethod
+    def of(
+        cls,
+        evaluator: Evaluator,
+        effect: Effect,
+        state: State,
+        bindings: Mapping[str, str],
+        duration: float | None,
+    ) -> EffectDelta:
+        adds, deletes, updates = evaluator.changes(effect, state, bindings, duration)
+        add_set = set(adds)
+        return cls(
+            added=tuple(a for a in add_set if a not in state),
+            deleted=tuple(d for d in set(deletes) - add_set if d in state),
+            fluents=tuple(
+                (k, state.value(*k), v) for k, v in updates.items() if state.value(*k) != v
+            ),
+        )
+
+    @property
+    def empty(self) -> bool:
+        return not (self.added or self.deleted or self.fluents)
+
+    def undo(self, knowledge: ProblemExpert) -> None:
+        """Revert each change that is still in place, in one knowledge transaction."""
+        state = knowledge.state()
+        with knowledge.transaction():
+            for atom in self.added:
+                if atom in state:
+                    knowledge.remove_predicate(atom)
+            for atom in self.deleted:
+                if atom not in state:
+                    knowledge.add_predicate(atom)
+            for (name, args), old, new in self.fluents:
+                if state.value(name, args) != new:
+                    continue
+                if old is None:
+                    knowledge.remove_function(name, args)
+                else:
+                    knowledge.set_function(FluentValue(FluentRef(name, args), old))
+
+
+@dataclass
+class ActionRuntime:
+    """One action's progress: which of its happenings took place, and why it stopped."""
+
+    index: int
+    step: PlanStep
+    ground: GroundAction
+    record: ActionRecord
+    start_reached: bool = False
+    end_reached: bool = False
+    finished: bool = False
+    skipped: bool = False
+    """Never started because the plan stopped (a failure, a cancel)."""
+    reason: str = ""
+    start_delta: EffectDelta | None = None
+    client: ActionClient | None = None
+    next_feedback_info: float = -math.inf
+    """Mission time before which a FEEDBACK updates the record without an info."""
+
+    @property
+    def text(self) -> str:
+        return self.step.text
+
+
+class PlanContext:
+    """Everything the behaviours of one running plan share.
+
+    The executor owns it; behaviours read ``knowledge``/``evaluator`` and report
+    through :meth:`action_started`, :meth:`action_finished` and friends, which keep
+    the records, publish ``ActionExecutionInfo`` and wake the executor.
+    """
+
+    def __init__(
+        self,
+        *,
+        hub: Hub,
+        knowledge: ProblemExpert,
+        evaluator: Evaluator,
+        graph: PlanGraph,
+        options: ExecutorOptions,
+        plan_id: str,
+        plan_index: int,
+        on_info: Callable[[ActionExecutionInfo], None] | None = None,
+    ) -> None:
+        self.hub = hub
+        self.knowledge = knowledge
+        self.evaluator = evaluator
+        self.graph = graph
+        self.options = options
+        self.plan_id = plan_id
+        self.plan_index = plan_index
+        self.on_info = on_info
+        self.actions: list[ActionRuntime] = []
+        for i, (step, ground) in enumerate(zip(graph.steps, graph.ground, strict=True)):
+            record = ActionRecord(
+                text=step.text,
+                plan_index=plan_index,
+                step=i,
+                planned_duration=step.duration,
+                request_id=f"{plan_id}/{plan_index}/{i}",
+            )
+            self.actions.append(ActionRuntime(i, step, ground, record))
+        self.draining = False
+        """Set on the first failure: no further action starts."""
+        self.cancelled = False
+        self.halt_requested = False
+        """Set after a failure with ``halt_on_failure``: the executor halts what runs."""
+        self.failures: list[str] = []
+        self.progress = False
+        """Set whenever an action moves on; the executor ticks again while it is set."""
+        self.changed = False
+        """Set when a status changed since the last DOT publication."""
+        self.tasks: set[asyncio.Task[Any]] = set()
+        self.dependents: list[set[int]] = [set() for _ in self.actions]
+        """For each action, the actions with a start or end wait on it."""
+        for i in range(len(self.actions)):
+            for point in (START, END):
+                for j, _ in graph.waits(i, point):
+                    self.dependents[j].add(i)
+        self.active: set[int] = {i for i in range(len(self.actions)) if not graph.waits(i, START)}
+        """Branches worth ticking: not parked waiting for a predecessor."""
+        self.unfinished = len(self.actions)
+        self._deadlines: list[float] = []
+        self._wake: Callable[[], None] = lambda: None
+        self._changed_steps: set[int] = set()
+
+    # ------------------------------------------------------------ time and wake-ups
+
+    def now(self) -> float:
+        """Mission time (the hub's clock)."""
+        return self.hub.clock.now()
+
+    def wake(self) -> None:
+        """Ask for a tick as soon as possible (safe from the loop's thread only)."""
+        self._wake()
+
+    def bind_wake(self, wake: Callable[[], None]) -> None:
+        self._wake = wake
+
+    def schedule(self, deadline: float) -> None:
+        """Ask for a tick at mission time ``deadline``."""
+        heapq.heappush(self._deadlines, deadline)
+
+    def next_deadline(self) -> float | None:
+        """The earliest deadline still in the future (past ones are dropped)."""
+        now = self.now()
+        while self._deadlines and self._deadlines[0] <= now:
+            heapq.heappop(self._deadlines)
+        return self._deadlines[0] if self._deadlines else None
+
+    # ------------------------------------------------------------ knowledge
+
+    def state(self) -> State:
+        return self.knowledge.state()
+
+    def holds(self, rt: ActionRuntime, cond: Condition) -> bool:
+        return self.evaluator.holds(cond, self.state(), GROUND, rt.step.duration)
+
+    def unmet(self, rt: ActionRuntime, cond: Condition) -> str:
+        """The conjuncts of ``cond`` that do not hold now, as ground PDDL text."""
+        return describe_unmet(self.evaluator, cond, self.state(), GROUND, rt.step.duration)
+
+    def reached(self, index: int, point: Point) -> bool:
+        rt = self.actions[index]
+        return rt.start_reached if point == START else rt.end_reached
+
+    # ------------------------------------------------------------ reporting
+
+    def take_changed_steps(self) -> set[int]:
+        """The steps whose status may have changed since the last call (for the DOT)."""
+        changed, self._changed_steps = self._changed_steps, set()
+        return changed
+
+    def publish_info(self, rt: ActionRuntime) -> None:
+        self._changed_steps.add(rt.index)
+        rec = rt.record
+        info = ActionExecutionInfo(
+            status=rec.status,
+            start_stamp=rec.start if rec.start is not None else 0.0,
+            status_stamp=self.now(),
+            action_full_name=rt.text,
+            action=rt.step.action,
+            arguments=rt.step.arguments,
+            duration=rt.step.duration,
+            completion=rec.completion,
+            message_status=rec.message,
+        )
+        self.hub.publish(Topics.ACTION_EXECUTION_INFO, info)
+        if self.on_info is not None:
+            try:
+                self.on_info(info)
+            except Exception:  # a broken observer must not break the plan
+                log.exception("on_info callback %r failed", self.on_info)
+
+    # ------------------------------------------------------------ which branches to tick
+
+    def activate(self, index: int) -> None:
+        if not self.actions[index].finished:
+            self.active.add(index)
+
+    def park(self, index: int) -> None:
+        """Stop ticking a branch until one of its predecessors moves on."""
+        self.active.discard(index)
+
+    def _moved(self, rt: ActionRuntime) -> None:
+        for i in self.dependents[rt.index]:
+            self.activate(i)
+
+    def _stop_starting(self) -> None:
+        self.draining = True
+        if self.options.halt_on_failure:
+            self.halt_requested = True
+        for rt in self.actions:
+            if not rt.finished and not rt.start_reached:
+                self.active.add(rt.index)
+
+    # ------------------------------------------------------------ reporting progress
+
+    def action_started(self, rt: ActionRuntime) -> None:
+        rt.start_reached = True
+        rt.record.start = self.now()
+        rt.record.status = ActionStatus.EXECUTING
+        self.progress = self.changed = True
+        self._moved(rt)
+        self.publish_info(rt)
+
+    def action_ended(self, rt: ActionRuntime) -> None:
+        rt.end_reached = True
+        if rt.record.end is None:
+            rt.record.end = self.now()
+        self.progress = self.changed = True
+        self._moved(rt)
+
+    def action_executed(self, rt: ActionRuntime, outcome: ActionOutcome) -> None:
+        """The performer is done (success or not); the at-end part may still wait."""
+        rec = rt.record
+        rec.end = self.now()
+        rec.performer = outcome.performer
+        rec.completion = outcome.completion
+        rec.message = outcome.status
+        rec.reauctioned = outcome.reauctioned
+        self.progress = True
+
+    def confirmed(self, rt: ActionRuntime, node: str) -> None:
+        """A performer was confirmed for the action: its work begins (first confirm
+        kept; a re-auction only changes the performer)."""
+        if rt.record.confirmed is None:
+            rt.record.confirmed = self.now()
+        rt.record.performer = node
+
+    def feedback(self, rt: ActionRuntime, completion: float, status: str) -> None:
+        """Keep the performer's progress; publish it at most once per ``info_period``
+        per action (status changes always go out, carrying the latest progress)."""
+        rt.record.completion = completion
+        rt.record.message = status
+        now = self.now()
+        if now < rt.next_feedback_info:
+            return
+        rt.next_feedback_info = now + self.options.info_period
+        self.publish_info(rt)
+
+    def action_finished(self, rt: ActionRuntime, success: bool) -> None:
+        """The action's branch is over; settle its record (called once)."""
+        if rt.finished:
+            return
+        rt.finished = True
+        self.unfinished -= 1
+        self.active.discard(rt.index)
+        self._moved(rt)
+        rec = rt.record
+        self.progress = self.changed = True
+        if success:
+            rec.status = ActionStatus.SUCCEEDED
+            if rec.start is None:
+                rec.start = self.now()
+            if rec.end is None:
+                rec.end = self.now()
+            self.publish_info(rt)
+            return
+        if rt.skipped:
+            rec.message = rt.reason or rec.message
+            self.publish_info(rt)  # NOT_EXECUTED stays: it never started; say why
+            return
+        rec.status = ActionStatus.FAILED
+        rec.message = rt.reason or rec.message or "failed"
+        if rt.start_reached and rec.end is None:
+            rec.end = self.now()
+        self._rollback(rt)
+        self._stop_starting()
+        self.failures.append(f"{rt.text}: {rec.message}")
+        self.publish_info(rt)
+
+    def action_halted(self, rt: ActionRuntime) -> None:
+        """The branch was stopped from outside (cancel, halt) before it finished."""
+        if rt.finished:
+            return
+        rt.finished = True
+        self.unfinished -= 1
+        self.active.discard(rt.index)
+        self.changed = True
+        if rt.start_reached and not rt.end_reached:
+            rt.record.status = ActionStatus.CANCELLED
+            rt.record.message = rt.reason or "cancelled"
+            if rt.record.end is None:
+                rt.record.end = self.now()
+            self._rollback(rt)
+            self.publish_info(rt)
+        else:
+            rt.skipped = True
+            rt.record.message = rt.reason or "not started: cancelled"
+            self.publish_info(rt)
+
+    def _rollback(self, rt: ActionRuntime) -> None:
+        if not self.options.rollback_on_halt or rt.end_reached or rt.start_delta is None:
+            return
+        if rt.start_delta.empty:
+            return
+        try:
+            rt.start_delta.undo(self.knowledge)
+        except PlansysBridgeError as exc:
+            rt.record.message += f" (its at-start effects could not be undone: {exc})"
+
+    def track(self, task: asyncio.Task[Any]) -> None:
+        self.tasks.add(task)
+        task.add_done_callback(self.tasks.discard)
