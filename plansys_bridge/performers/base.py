@@ -28,13 +28,9 @@ import logging
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
-from pathlib import Path
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar
 
-from plansys_bridge.clock import Clock
-from plansys_bridge.errors import ConfigError, HubError, PlansysBridgeError
-from plansys_bridge.hub.hub import Hub
+from plansys_bridge.errors import ConfigError, HubError
 from plansys_bridge.hub.messages import (
     ActionExecution,
     ActionPerformerStatus,
@@ -44,9 +40,14 @@ from plansys_bridge.hub.messages import (
 )
 from plansys_bridge.hub.routing import performer_keys
 from plansys_bridge.hub.transport import Subscription
-
-if TYPE_CHECKING:
-    from plansys_bridge.knowledge.problem_expert import ProblemExpert
+from plansys_bridge.performers.entry import PerformerConfig, parse_entry
+from plansys_bridge.performers.goal import (
+    ActionFailed,
+    ActionGoal,
+    PerformerContext,
+    arguments_match,
+    same_goal,
+)
 
 __all__ = [
     "ActionFailed",
@@ -58,61 +59,6 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class ActionGoal:
-    """One action instance handed to a performer."""
-
-    action: str
-    arguments: tuple[str, ...]
-    request_id: str
-
-    @property
-    def full_name(self) -> str:
-        return "(" + " ".join((self.action, *self.arguments)) + ")"
-
-
-class ActionFailed(PlansysBridgeError):
-    """Raise from ``execute()`` to finish the action unsuccessfully with this message."""
-
-
-@dataclass
-class PerformerContext:
-    """What a performer may use: the hub, the clock, the knowledge, where its files are."""
-
-    hub: Hub
-    clock: Clock
-    knowledge: ProblemExpert | None = None
-    base_dir: Path = field(default_factory=Path)
-    recorder: object | None = None
-
-
-def arguments_match(specialized: Sequence[str], arguments: Sequence[str]) -> bool:
-    """PlanSys2's rule: compare position by position, ``""`` matches anything.
-
-    No specialised arguments matches every call. Lengths may differ (PlanSys2 only
-    warns): the positions both have are compared.
-    """
-    return all(s == "" or s == a for s, a in zip(specialized, arguments, strict=False))
-
-
-@dataclass(frozen=True)
-class PerformerConfig:
-    """A mission file's performer entry after the common keys were checked."""
-
-    kind: str
-    name: str
-    actions: dict[str, tuple[str, ...]]
-    heartbeat_period: float
-    commit_timeout: float
-    settings: dict[str, Any]
-    """Kind-specific settings, only keys the class declares in ``settings_keys``."""
-    key: str
-    """Where the entry is in the mission file, e.g. ``performers[2]``."""
-
-
-_COMMON_KEYS = ("kind", "name", "actions", "heartbeat_period", "commit_timeout")
 
 
 class ActionPerformer(ABC):
@@ -305,7 +251,7 @@ class ActionPerformer(ABC):
             self._on_confirm(msg)
         elif kind is ExecutionType.REJECT:
             committed = self.committed
-            if committed is not None and _same(committed, msg):
+            if committed is not None and same_goal(committed, msg):
                 self._release_commitment()
         elif kind is ExecutionType.CANCEL:
             self._on_cancel_msg(msg)
@@ -341,7 +287,7 @@ class ActionPerformer(ABC):
 
     def _on_confirm(self, msg: ActionExecution) -> None:
         goal = self.committed
-        if goal is None or not _same(goal, msg):
+        if goal is None or not same_goal(goal, msg):
             return  # not (or no longer) committed to this request
         self._release_commitment()
         self.goal = goal
@@ -356,11 +302,11 @@ class ActionPerformer(ABC):
 
     def _on_cancel_msg(self, msg: ActionExecution) -> None:
         committed = self.committed
-        if committed is not None and _same(committed, msg):
+        if committed is not None and same_goal(committed, msg):
             self._release_commitment()
             return
         goal, task = self.goal, self._task
-        if goal is None or task is None or not _same(goal, msg) or self._cancelling:
+        if goal is None or task is None or not same_goal(goal, msg) or self._cancelling:
             return
         self._cancelling = True
         task.cancel()
@@ -458,34 +404,7 @@ class ActionPerformer(ABC):
     @classmethod
     def parse_config(cls, config: Mapping[str, Any], *, key: str = "performer") -> PerformerConfig:
         """Check a mission file's performer entry; unknown keys name themselves."""
-        if not isinstance(config, Mapping):
-            raise ConfigError("a performer entry must be a mapping", key=key)
-        allowed = set(_COMMON_KEYS) | set(cls.settings_keys)
-        for entry_key in config:
-            if entry_key not in allowed:
-                raise ConfigError(
-                    f"unknown key for a {cls.__name__} (allowed: {', '.join(sorted(allowed))})",
-                    key=f"{key}.{entry_key}",
-                )
-        kind = config.get("kind", "")
-        if not isinstance(kind, str):
-            raise ConfigError(f"must be a string, got {kind!r}", key=f"{key}.kind")
-        name = config.get("name")
-        if not isinstance(name, str) or not name.strip():
-            raise ConfigError("a performer needs a non-empty string name", key=f"{key}.name")
-        actions = _parse_actions(config.get("actions"), f"{key}.actions")
-        heartbeat = _positive(config.get("heartbeat_period", 1.0), f"{key}.heartbeat_period")
-        commit = _positive(config.get("commit_timeout", 2.0), f"{key}.commit_timeout")
-        settings = {k: v for k, v in config.items() if k not in _COMMON_KEYS}
-        return PerformerConfig(
-            kind=kind,
-            name=name.strip(),
-            actions=actions,
-            heartbeat_period=heartbeat,
-            commit_timeout=commit,
-            settings=settings,
-            key=key,
-        )
+        return parse_entry(config, kind_name=cls.__name__, settings_keys=cls.settings_keys, key=key)
 
     @classmethod
     def from_config(
@@ -515,47 +434,3 @@ class ActionPerformer(ABC):
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.node_name} {self.state.name}>"
-
-
-def _same(goal: ActionGoal, msg: ActionExecution) -> bool:
-    """Does ``msg`` talk about ``goal``? (request_id when both have one, else the action text)."""
-    if goal.request_id and msg.request_id and goal.request_id != msg.request_id:
-        return False
-    return goal.action == msg.action and goal.arguments == tuple(msg.arguments)
-
-
-def _positive(value: object, key: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not value > 0:
-        raise ConfigError(f"must be a number > 0, got {value!r}", key=key)
-    return float(value)
-
-
-def _parse_actions(value: object, key: str) -> dict[str, tuple[str, ...]]:
-    """``actions`` is ``{action: [specialised args]}`` (or a list of action names)."""
-    if value is None:
-        raise ConfigError("missing: the actions this performer serves", key=key)
-    if isinstance(value, list | tuple):
-        value = {name: [] for name in value}
-    if not isinstance(value, Mapping) or not value:
-        raise ConfigError(
-            "must map each action name to its specialised arguments, e.g. {move: [r1]}", key=key
-        )
-    out: dict[str, tuple[str, ...]] = {}
-    for action, args in value.items():
-        if not isinstance(action, str) or not action.strip():
-            raise ConfigError(f"action names must be strings, got {action!r}", key=key)
-        where = f"{key}.{action}"
-        if args is None:
-            args = []
-        if isinstance(args, str) or not isinstance(args, list | tuple):
-            raise ConfigError(
-                f'specialised arguments must be a list ("" = any), got {args!r}', key=where
-            )
-        spec: list[str] = []
-        for i, arg in enumerate(args):
-            text = "" if arg is None else arg
-            if not isinstance(text, str):
-                raise ConfigError(f"must be a string, got {arg!r}", key=f"{where}[{i}]")
-            spec.append(text.strip().lower())
-        out[action.strip().lower()] = tuple(spec)
-    return out

@@ -46,6 +46,7 @@ from plansys_bridge.terminal.describe import (
     signature,
 )
 from plansys_bridge.terminal.help import help_text
+from plansys_bridge.terminal.repl import run_repl
 from plansys_bridge.terminal.runner import Runner
 from plansys_bridge.textfile import read_text
 
@@ -111,8 +112,6 @@ class Terminal:
 
     def repl(self, inp: TextIO | None = None, prompt: str | None = None) -> int:
         """Read commands until ``quit`` or end of input (see :mod:`.repl`)."""
-        from plansys_bridge.terminal.repl import run_repl
-
         return run_repl(self, inp, prompt)
 
     def source(self, path: str | Path, skip: Collection[str] = (), echo: bool = False) -> str:

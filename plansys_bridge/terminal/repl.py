@@ -12,20 +12,30 @@ from __future__ import annotations
 import contextlib
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, TextIO
+from typing import Protocol, TextIO
 
+from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.terminal.completion import install
 
-if TYPE_CHECKING:
-    from plansys_bridge.terminal.core import Terminal
+__all__ = ["HISTORY_FILE", "LineRunner", "run_repl"]
 
-__all__ = ["HISTORY_FILE", "run_repl"]
+
+class LineRunner(Protocol):
+    """What the loop drives: the terminal (:class:`~.core.Terminal`) runs one line at
+    a time, says when ``quit`` was typed, and names the knowledge to complete from."""
+
+    finished: bool
+    out: TextIO
+    problem_expert: ProblemExpert
+
+    def execute_line(self, line: str) -> str: ...
+
 
 HISTORY_FILE = Path("~/.plansys_bridge_history")
 HISTORY_LENGTH = 1000
 
 
-def run_repl(terminal: Terminal, inp: TextIO | None = None, prompt: str | None = None) -> int:
+def run_repl(terminal: LineRunner, inp: TextIO | None = None, prompt: str | None = None) -> int:
     """Read commands until ``quit`` or end of input; returns an exit code."""
     source = inp if inp is not None else sys.stdin
     interactive = source is sys.stdin and source.isatty()

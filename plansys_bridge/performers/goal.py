@@ -1,0 +1,68 @@
+"""What a performer is handed and what it may use.
+
+An :class:`ActionGoal` is one action instance of the plan; :class:`ActionFailed`
+is how ``execute()`` says it did not work; a :class:`PerformerContext` holds the
+hub, the clock and the knowledge a performer may read. :func:`arguments_match` is
+PlanSys2's rule for a performer specialised to some arguments.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from plansys_bridge.clock import Clock
+from plansys_bridge.errors import PlansysBridgeError
+from plansys_bridge.hub.hub import Hub
+from plansys_bridge.hub.messages import ActionExecution
+
+if TYPE_CHECKING:
+    from plansys_bridge.knowledge.problem_expert import ProblemExpert
+
+__all__ = ["ActionFailed", "ActionGoal", "PerformerContext", "arguments_match", "same_goal"]
+
+
+@dataclass(frozen=True)
+class ActionGoal:
+    """One action instance handed to a performer."""
+
+    action: str
+    arguments: tuple[str, ...]
+    request_id: str
+
+    @property
+    def full_name(self) -> str:
+        return "(" + " ".join((self.action, *self.arguments)) + ")"
+
+
+class ActionFailed(PlansysBridgeError):
+    """Raise from ``execute()`` to finish the action unsuccessfully with this message."""
+
+
+@dataclass
+class PerformerContext:
+    """What a performer may use: the hub, the clock, the knowledge, where its files are."""
+
+    hub: Hub
+    clock: Clock
+    knowledge: ProblemExpert | None = None
+    base_dir: Path = field(default_factory=Path)
+    recorder: object | None = None
+
+
+def arguments_match(specialized: Sequence[str], arguments: Sequence[str]) -> bool:
+    """PlanSys2's rule: compare position by position, ``""`` matches anything.
+
+    No specialised arguments matches every call. Lengths may differ (PlanSys2 only
+    warns): the positions both have are compared.
+    """
+    return all(s == "" or s == a for s, a in zip(specialized, arguments, strict=False))
+
+
+def same_goal(goal: ActionGoal, msg: ActionExecution) -> bool:
+    """Does ``msg`` talk about ``goal``? (request_id when both have one, else the action text)."""
+    if goal.request_id and msg.request_id and goal.request_id != msg.request_id:
+        return False
+    return goal.action == msg.action and goal.arguments == tuple(msg.arguments)
