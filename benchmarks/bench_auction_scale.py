@@ -14,7 +14,7 @@ than wall time by other work on a shared machine), with:
 The peer figure printed beside each is the same measure at the smallest N scaled
 linearly (``linear``): a ratio near 1 means cost linear in bidders.
 
-Run: ``python benchmarks/bench_auction_scale.py [--bidders 10 50 200] [--auctions 20]
+Run: ``python benchmarks/bench_auction_scale.py [--bidders 10 50 100 200] [--auctions 20]
 [--modes inprocess,dds] [--repeat 3] [--json]``
 """
 
@@ -117,7 +117,7 @@ async def _inprocess_with(clock: VirtualClock, bidders: int, auctions: int) -> f
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--bidders", type=int, nargs="+", default=[10, 50, 200])
+    parser.add_argument("--bidders", type=int, nargs="+", default=[10, 50, 100, 200])
     parser.add_argument("--auctions", type=int, default=20)
     parser.add_argument("--modes", default="inprocess,dds")
     parser.add_argument("--repeat", type=int, default=3, help="runs per figure (best kept)")

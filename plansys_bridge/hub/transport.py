@@ -155,6 +155,30 @@ class InProcessTransport:
         else:
             loop.call_soon_threadsafe(self._deliver, topic, subs, msg)
 
+    def publish_batch(self, messages: list[tuple[str, object]]) -> None:
+        """Publish ``(topic, msg)`` pairs in order, from any thread.
+
+        From another thread the whole batch costs one ``call_soon_threadsafe`` (one
+        wake-up of the loop) instead of one per message: what a DDS reader thread
+        took in one go is delivered in one go.
+        """
+        if threading.get_ident() == self._loop_thread or self._loop is None:
+            for topic, msg in messages:
+                self.publish(topic, msg)
+            return
+        if self._closed:
+            raise HubError("cannot publish: transport closed")
+        self.published += len(messages)
+        batch = [
+            (topic, subs, msg) for topic, msg in messages if (subs := self._subscribers.get(topic))
+        ]
+        if batch:
+            self._loop.call_soon_threadsafe(self._deliver_batch, batch)
+
+    def _deliver_batch(self, batch: list[tuple[str, list[_InProcessSubscription], object]]) -> None:
+        for topic, subs, msg in batch:
+            self._deliver(topic, subs, msg)
+
     def _drain(self) -> None:
         """Deliver what was published before this callback ran (later messages wait for
         the next one, so callbacks scheduled meanwhile keep their turn)."""

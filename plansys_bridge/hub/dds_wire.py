@@ -1,0 +1,258 @@
+"""XCDR1 little-endian bytes of the hub's DDS samples, compiled once per ROS 2 type.
+
+Cyclone's Python binding serialises a sample by walking a generic tree of type
+machines, 30-40 us for one ``ActionExecution`` each way: with every bidder of an
+auction answering, that walk was most of an auction's cost over DDS. The functions
+here are generated from the same parsed ``.msg`` fields the DDS types come from
+(:func:`~plansys_bridge.interfaces.typestore.ros2_fielddefs`), as straight-line
+Python with precompiled ``struct`` formats, and produce or read exactly the bytes
+Cyclone would (ROS 2's XCDR1: a 4-byte encapsulation header ``00 01 00 00``, fields
+in ``.msg`` order, each primitive aligned to its size counted from after the header,
+strings and sequences as a uint32 length then the items); a test compares them with
+Cyclone's own on every hub type. Samples in any other representation (big-endian,
+XCDR2) are left to Cyclone's deserialiser.
+
+Samples are the generated :func:`~plansys_bridge.interfaces.dds.dds_type` classes, so
+a sample decoded here is the same object Cyclone would have returned.
+"""
+
+from __future__ import annotations
+
+import struct
+import threading
+from collections.abc import Callable
+from typing import Any
+
+from plansys_bridge.interfaces.dds import dds_type
+from plansys_bridge.interfaces.typestore import Nodetype, ros2_fielddefs
+
+__all__ = ["XCDR1_LE", "WireCodec", "wire_codec"]
+
+XCDR1_LE = b"\x00\x01"
+"""The encapsulation identifier of plain CDR, little-endian (what ROS 2 nodes write)."""
+
+_FORMATS: dict[str, str] = {
+    "bool": "?",
+    "byte": "B",
+    "char": "B",
+    "int8": "b",
+    "uint8": "B",
+    "int16": "h",
+    "uint16": "H",
+    "int32": "i",
+    "uint32": "I",
+    "int64": "q",
+    "uint64": "Q",
+    "float32": "f",
+    "float64": "d",
+}
+_ZEROS = tuple(bytes(n) for n in range(8))
+
+
+class WireCodec:
+    """``encode(sample) -> bytes`` and ``decode(bytes) -> sample`` for one ROS 2 type.
+
+    ``decode`` raises ``ValueError`` for bytes that do not hold a sample of the type
+    (cut short, a length past the end, text that is not UTF-8), ``encode`` for a
+    value the type cannot carry (out of range, a bound exceeded).
+    """
+
+    def __init__(self, ros_type: str) -> None:
+        self.ros_type = ros_type
+        self._encode, self._decode = _compile(ros_type)
+
+    def encode(self, sample: Any) -> bytes:
+        try:
+            return self._encode(sample)
+        except (struct.error, OverflowError, ValueError, AttributeError) as exc:
+            raise ValueError(f"{self.ros_type}: {exc}") from exc
+
+    def decode(self, data: bytes) -> Any:
+        if data[:2] != XCDR1_LE:
+            # Another representation: Cyclone reads every one it can write.
+            return dds_type(self.ros_type).deserialize(data)
+        try:
+            return self._decode(data)
+        except (struct.error, IndexError, ValueError) as exc:  # UnicodeDecodeError too
+            raise ValueError(f"{self.ros_type}: malformed sample: {exc}") from exc
+
+
+_lock = threading.Lock()
+_codecs: dict[str, WireCodec] = {}
+
+
+def wire_codec(ros_type: str) -> WireCodec:
+    """The codec of ``ros_type`` (compiled on first use, then shared)."""
+    with _lock:
+        codec = _codecs.get(ros_type)
+        if codec is None:
+            codec = _codecs[ros_type] = WireCodec(ros_type)
+        return codec
+
+
+# -- code generation ----------------------------------------------------------------------
+
+
+class _Source:
+    """Lines of one generated function, with fresh local names and its globals."""
+
+    def __init__(self) -> None:
+        self.lines: list[str] = []
+        self.env: dict[str, Any] = {"_Z": _ZEROS, "_U32": struct.Struct("<I")}
+        self._n = 0
+
+    def name(self, stem: str) -> str:
+        self._n += 1
+        return f"{stem}{self._n}"
+
+    def const(self, stem: str, value: Any) -> str:
+        name = self.name("_" + stem)
+        self.env[name] = value
+        return name
+
+    def add(self, indent: int, line: str) -> None:
+        self.lines.append("    " * indent + line)
+
+    def function(self, header: str) -> Callable[..., Any]:
+        text = "\n".join([header, *self.lines])
+        namespace: dict[str, Any] = {}
+        exec(compile(text, "<dds_wire>", "exec"), self.env, namespace)
+        return namespace[header.split()[1].split("(")[0]]
+
+
+def _compile(ros_type: str) -> tuple[Callable[[Any], bytes], Callable[[bytes], Any]]:
+    enc = _Source()
+    enc.add(1, "buf = bytearray(b'\\x00\\x01\\x00\\x00')")
+    _encode_struct(enc, ros_type, "sample", 1)
+    enc.add(1, "buf += _Z[-len(buf) & 3]")  # Cyclone pads a sample to 4 bytes
+    enc.add(1, "return bytes(buf)")
+    dec = _Source()
+    dec.add(1, "p = 4")
+    dec.add(1, "size = len(data)")
+    result = _decode_struct(dec, ros_type, 1)
+    dec.add(1, f"return {result}")
+    return enc.function("def encode(sample):"), dec.function("def decode(data):")
+
+
+def _fields(ros_type: str) -> list[tuple[str, Any]]:
+    return list(ros2_fielddefs()[ros_type][1])
+
+
+def _align(src: _Source, indent: int, size: int, *, decoding: bool) -> None:
+    if size == 1:
+        return
+    mask = size - 1
+    if decoding:
+        src.add(indent, f"p += (4 - p) & {mask}")
+    else:
+        src.add(indent, f"buf += _Z[(4 - len(buf)) & {mask}]")
+
+
+def _encode_struct(src: _Source, ros_type: str, expr: str, indent: int) -> None:
+    for field, desc in _fields(ros_type):
+        var = src.name("v")
+        src.add(indent, f"{var} = {expr}.{field}")
+        _encode_value(src, desc, var, indent)
+
+
+def _encode_value(src: _Source, desc: tuple[Any, Any], var: str, indent: int) -> None:
+    kind, detail = desc
+    if kind == Nodetype.BASE:
+        base, bound = detail
+        if base == "string":
+            text = src.name("t")
+            src.add(indent, f"{text} = {var}.encode()")
+            if bound:
+                src.add(indent, f"if len({text}) > {bound}:")
+                src.add(indent + 1, f"raise ValueError('string longer than its bound {bound}')")
+            _align(src, indent, 4, decoding=False)
+            src.add(indent, f"buf += _U32.pack(len({text}) + 1)")
+            src.add(indent, f"buf += {text}")
+            src.add(indent, "buf += b'\\x00'")
+            return
+        fmt = _FORMATS[base]
+        packer = src.const("S", struct.Struct("<" + fmt))
+        _align(src, indent, struct.calcsize(fmt), decoding=False)
+        src.add(indent, f"buf += {packer}.pack({var})")
+        return
+    if kind == Nodetype.NAME:
+        _encode_struct(src, detail, var, indent)
+        return
+    element, size = detail
+    if kind == Nodetype.ARRAY:
+        src.add(indent, f"if len({var}) != {size}:")
+        src.add(indent + 1, f"raise ValueError(f'array of {size} items has {{len({var})}}')")
+    else:
+        if size:
+            src.add(indent, f"if len({var}) > {size}:")
+            src.add(indent + 1, f"raise ValueError('sequence longer than its bound {size}')")
+        _align(src, indent, 4, decoding=False)
+        src.add(indent, f"buf += _U32.pack(len({var}))")
+    if element[0] == Nodetype.BASE and element[1][0] != "string":
+        fmt = _FORMATS[element[1][0]]
+        if struct.calcsize(fmt) > 1:
+            src.add(indent, f"if {var}:")
+            _align(src, indent + 1, struct.calcsize(fmt), decoding=False)
+        src.add(indent, f"buf += struct.pack(f'<{{len({var})}}{fmt}', *{var})")
+        src.env["struct"] = struct
+        return
+    item = src.name("e")
+    src.add(indent, f"for {item} in {var}:")
+    _encode_value(src, element, item, indent + 1)
+
+
+def _decode_struct(src: _Source, ros_type: str, indent: int) -> str:
+    """Emit code reading ``ros_type`` at ``p``; return the expression building it."""
+    values = [_decode_value(src, desc, indent) for _field, desc in _fields(ros_type)]
+    cls = src.const("C", dds_type(ros_type))
+    return f"{cls}({', '.join(values)})"
+
+
+def _decode_value(src: _Source, desc: tuple[Any, Any], indent: int) -> str:
+    kind, detail = desc
+    var = src.name("v")
+    if kind == Nodetype.BASE:
+        base = detail[0]
+        if base == "string":
+            n = src.name("n")
+            _align(src, indent, 4, decoding=True)
+            src.add(indent, f"{n} = _U32.unpack_from(data, p)[0]")
+            src.add(indent, f"p += 4 + {n}")
+            src.add(indent, f"if {n} == 0 or p > size:")
+            src.add(indent + 1, "raise ValueError(f'string length {" + n + "} past the end')")
+            src.add(indent, f"{var} = data[p - {n}:p - 1].decode()")
+            return var
+        fmt = _FORMATS[base]
+        unpacker = src.const("S", struct.Struct("<" + fmt))
+        _align(src, indent, struct.calcsize(fmt), decoding=True)
+        src.add(indent, f"{var} = {unpacker}.unpack_from(data, p)[0]")
+        src.add(indent, f"p += {struct.calcsize(fmt)}")
+        return var
+    if kind == Nodetype.NAME:
+        src.add(indent, f"{var} = {_decode_struct(src, detail, indent)}")
+        return var
+    element, size = detail
+    count = src.name("n")
+    if kind == Nodetype.ARRAY:
+        src.add(indent, f"{count} = {size}")
+    else:
+        _align(src, indent, 4, decoding=True)
+        src.add(indent, f"{count} = _U32.unpack_from(data, p)[0]")
+        src.add(indent, "p += 4")
+        src.add(indent, f"if {count} > size - p:")
+        src.add(indent + 1, "raise ValueError(f'sequence of {" + count + "} items past the end')")
+    if element[0] == Nodetype.BASE and element[1][0] != "string":
+        fmt = _FORMATS[element[1][0]]
+        width = struct.calcsize(fmt)
+        src.env["struct"] = struct
+        if width > 1:
+            src.add(indent, f"if {count}:")
+            _align(src, indent + 1, width, decoding=True)
+        src.add(indent, f"{var} = list(struct.unpack_from(f'<{{{count}}}{fmt}', data, p))")
+        src.add(indent, f"p += {count} * {width}")
+        return var
+    src.add(indent, f"{var} = []")
+    src.add(indent, f"for _ in range({count}):")
+    item = _decode_value(src, element, indent + 1)
+    src.add(indent + 1, f"{var}.append({item})")
+    return var
