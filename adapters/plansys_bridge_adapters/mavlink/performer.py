@@ -236,7 +236,7 @@ class MavlinkPerformer(ActionPerformer):
         RC mode channel once RC input arrives).
         """
         t = self.settings.timeouts
-        if not v.ekf_ready():
+        if not v.telemetry.ekf_ready():
             self._progress(0.0, "waiting for the EKF to use GPS")
             await v.wait_ekf(t.ekf)
         await v.set_mode("GUIDED")

@@ -15,7 +15,8 @@ from plansys_bridge_adapters.mavlink.errors import (
     LinkError,
     VehicleFault,
 )
-from plansys_bridge_adapters.mavlink.vehicle import LinkSettings, MavlinkVehicle, _device
+from plansys_bridge_adapters.mavlink.link import _device
+from plansys_bridge_adapters.mavlink.vehicle import LinkSettings, MavlinkVehicle
 from pymavlink.dialects.v20 import ardupilotmega as ml
 
 FAST = LinkSettings(

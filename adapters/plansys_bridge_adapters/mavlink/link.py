@@ -1,0 +1,195 @@
+"""The MAVLink link of one vehicle: the pymavlink connection and the thread reading it.
+
+pymavlink is blocking, so :class:`MavlinkLink` runs a reader thread that hands each
+decoded message to the event loop (``call_soon_threadsafe``); the vehicle client on
+the loop never touches the socket except to send, under a lock. The link speaks
+MAVLink 2 on its own codec (see :meth:`MavlinkLink._speak_mavlink2`).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import threading
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from pymavlink import mavutil
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from .errors import LinkError
+
+MAV_COMP_ID_MISSIONPLANNER = 190
+
+DEFAULT_TELEMETRY_HZ: Mapping[str, float] = {
+    "GLOBAL_POSITION_INT": 5.0,
+    "SYS_STATUS": 2.0,
+    "EKF_STATUS_REPORT": 2.0,
+    "HOME_POSITION": 0.5,
+}
+
+
+@dataclass(frozen=True)
+class LinkSettings:
+    """Timeouts and rates of one link, in loop seconds."""
+
+    connect_timeout: float = 30.0
+    """How long to keep trying to open the link and to wait for the first HEARTBEAT."""
+    heartbeat_timeout: float = 3.0
+    """A supervised action fails when no HEARTBEAT came for this long."""
+    command_timeout: float = 1.0
+    """Wait for a COMMAND_ACK this long before re-sending the command."""
+    command_retries: int = 3
+    telemetry_hz: Mapping[str, float] = field(default_factory=lambda: dict(DEFAULT_TELEMETRY_HZ))
+    source_system: int = 255
+    source_component: int = MAV_COMP_ID_MISSIONPLANNER
+
+
+class MavlinkLink:
+    """One open pymavlink connection (``url`` in pymavlink's syntax) and its reader."""
+
+    def __init__(self, url: str, settings: LinkSettings) -> None:
+        self.url = url
+        self.settings = settings
+        self._conn: Any = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._reader: threading.Thread | None = None
+        self._closing = threading.Event()
+        self._send_lock = threading.Lock()
+
+    @property
+    def is_open(self) -> bool:
+        return self._conn is not None
+
+    async def open(self, deadline: float) -> None:
+        """Open the connection, retrying every 0.5 s until loop time ``deadline``."""
+        loop = self._loop = asyncio.get_running_loop()
+        device, kwargs = _device(self.url)
+        last: Exception | None = None
+        while True:
+            try:
+                conn = await loop.run_in_executor(
+                    None,
+                    lambda: mavutil.mavlink_connection(
+                        device,
+                        source_system=self.settings.source_system,
+                        source_component=self.settings.source_component,
+                        **kwargs,
+                    ),
+                )
+                self._conn = self._speak_mavlink2(conn)
+                self._closing.clear()
+                return
+            except (OSError, ValueError) as exc:
+                last = exc
+            if loop.time() + 0.5 > deadline:
+                raise LinkError(self.url, f"cannot open the link: {last}") from last
+            await asyncio.sleep(0.5)
+
+    def _speak_mavlink2(self, conn: Any) -> Any:
+        """Give the link its own MAVLink 2 codec (ArduPilot's default protocol).
+
+        Left alone, pymavlink switches protocol on the first MAVLink 2 byte by
+        setting ``MAVLINK20`` in the process environment and swapping its global
+        dialect, which changes every other link in the process; this link never
+        does that. MAVLink 1 frames from older vehicles still parse.
+        """
+        conn.mav = mavlink2.MAVLink(
+            conn, srcSystem=self.settings.source_system, srcComponent=self.settings.source_component
+        )
+        conn.mav.robust_parsing = True
+        conn.WIRE_PROTOCOL_VERSION = "2.0"
+        conn.first_byte = False
+        return conn
+
+    def start_reading(
+        self, on_message: Callable[[Any], None], on_error: Callable[[str], None]
+    ) -> None:
+        """Start the reader thread: ``on_message(msg)`` and ``on_error(reason)`` run on
+        the loop that opened the link."""
+        self._reader = threading.Thread(
+            target=self._read_loop,
+            args=(on_message, on_error),
+            name=f"mavlink-reader {self.url}",
+            daemon=True,
+        )
+        self._reader.start()
+
+    def _read_loop(
+        self, on_message: Callable[[Any], None], on_error: Callable[[str], None]
+    ) -> None:
+        conn = self._conn
+
+        def eof() -> None:
+            self._closing.set()
+            self._post(on_error, "link closed by the vehicle")
+
+        conn.handle_eof = eof  # pymavlink would only print and keep reading
+        conn.handle_disconnect = eof
+        while not self._closing.is_set():
+            try:
+                msg = conn.recv_msg()
+            except Exception as exc:
+                self._post(on_error, f"link error: {exc}")
+                return
+            if msg is None:
+                if self._closing.is_set():
+                    return
+                with contextlib.suppress(Exception):
+                    conn.select(0.05)
+                continue
+            if msg.get_type() != "BAD_DATA":
+                self._post(on_message, msg)
+
+    def _post(self, fn: Callable[..., None], *args: Any) -> None:
+        loop = self._loop
+        if loop is None or loop.is_closed():
+            return
+        with contextlib.suppress(RuntimeError):
+            loop.call_soon_threadsafe(fn, *args)
+
+    def send(self, fn_name: str, *args: Any) -> None:
+        """Call pymavlink's ``conn.mav.<fn_name>(*args)`` (e.g. ``heartbeat_send``)."""
+        conn = self._conn
+        if conn is None:
+            raise LinkError(self.url, "link is not open")
+        with self._send_lock:
+            try:
+                getattr(conn.mav, fn_name)(*args)
+            except OSError as exc:
+                raise LinkError(self.url, f"cannot send: {exc}") from exc
+
+    async def close(self) -> None:
+        """Stop the reader thread and close the connection (idempotent)."""
+        self._closing.set()
+        reader, self._reader = self._reader, None
+        if reader is not None and self._loop is not None:
+            await self._loop.run_in_executor(None, reader.join, 2.0)
+        conn, self._conn = self._conn, None
+        if conn is not None:
+            with contextlib.suppress(Exception):
+                conn.close()
+
+
+def _device(url: str) -> tuple[str, dict[str, Any]]:
+    """pymavlink device string and options for ``url``.
+
+    ``tcp:``/``udp:``/``udpin:``/``udpout:`` go to pymavlink unchanged;
+    ``serial:/dev/ttyUSB0:57600`` (or a bare device path, optionally ``:baud``)
+    opens a serial port.
+    """
+    if url.startswith(("tcp:", "udp:", "udpin:", "udpout:", "udpbcast:", "tcpin:")):
+        parts = url.split(":")
+        if len(parts) != 3 or not parts[2].isdigit():
+            raise LinkError(url, "a network URL must look like tcp:HOST:PORT")
+        options: dict[str, Any] = {"retries": 0} if url.startswith("tcp:") else {}
+        return url, options
+    path = url.removeprefix("serial:")
+    baud = 115200
+    head, _, tail = path.rpartition(":")
+    if head and tail.isdigit():
+        path, baud = head, int(tail)
+    if not path:
+        raise LinkError(url, "no serial device given")
+    return path, {"baud": baud}
