@@ -126,6 +126,9 @@ class KnowledgeConfig(_Strict):
     instances: dict[str, str] = Field(default_factory=dict)
     predicates: list[str] = Field(default_factory=list)
     functions: list[str] = Field(default_factory=list)
+    function_files: list[str] = Field(default_factory=list)
+    """Files of ``(= (f a) 1.5)`` entries (``learn --functions`` writes them), set
+    after ``functions``, so learned values replace the guesses."""
 
 
 class EventConfig(_Strict):
@@ -178,6 +181,8 @@ class MissionConfig(_Strict):
     events: list[EventConfig] = Field(default_factory=list)
     record: str | None = None
     """Write the whole run to this ROS 2 bag (mcap)."""
+    bid_costs: str | None = None
+    """Learned per-performer costs (``learn --costs``), bid instead of the performers' own."""
     timeout: float | None = Field(None, gt=0)
     """Give up the mission after this many seconds of mission time."""
     bridge: dict[str, Any] | None = None
@@ -311,6 +316,10 @@ def mission_from_dict(
     mission.executor_options()  # the executor's own checks, errors naming the key
     if mission.planner != PlannerConfig():
         make_planner(mission)  # unknown solvers and options are errors now, not at planning
+    if mission.bid_costs is not None:
+        from plansys_bridge.performers.bid_costs import load_bid_costs
+
+        load_bid_costs(mission.resolve(mission.bid_costs))
     if mission.bridge is not None:
         from plansys_bridge.bridge.config import parse_bridge_config
 

@@ -27,6 +27,7 @@ SUBCOMMANDS = (
     "performers",
     "bridge",
     "report",
+    "learn",
     "monitor",
     "serve",
     "new-adapter",

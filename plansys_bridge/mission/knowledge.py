@@ -12,6 +12,7 @@ from collections.abc import Mapping
 
 from plansys_bridge.errors import ConfigError, PddlError
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
+from plansys_bridge.learning.function_file import load_function_file
 from plansys_bridge.mission.file_keys import keyed
 from plansys_bridge.mission_config import EventConfig, MissionConfig
 from plansys_bridge.pddl.model import Domain
@@ -60,6 +61,8 @@ def build_knowledge(mission: MissionConfig, domain: Domain) -> ProblemExpert:
         for i, value in enumerate(mission.knowledge.functions):
             with keyed(mission, f"knowledge.functions[{i}]"):
                 knowledge.set_function(value)
+        for i, name in enumerate(mission.knowledge.function_files):
+            load_function_file(knowledge, mission.resolve(name), f"knowledge.function_files[{i}]")
         if mission.goal is not None:
             with keyed(mission, "goal"):
                 knowledge.set_goal(mission.goal)

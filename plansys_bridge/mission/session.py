@@ -89,6 +89,7 @@ class MissionSession:
             if self.local_performers:
                 with in_mission_file(self.mission):
                     self.performers = performers_from_config(entries, context)
+                self._apply_bid_costs()
             await start_performers(self.performers, self._say)
             if not self.local_performers:
                 await self._wait_for_remote_performers()
@@ -106,6 +107,15 @@ class MissionSession:
 
     async def __aexit__(self, *exc: object) -> None:
         await self._shutdown()
+
+    def _apply_bid_costs(self) -> None:
+        if self.mission.bid_costs is None:
+            return
+        from plansys_bridge.performers.bid_costs import load_bid_costs
+
+        costs = load_bid_costs(self.mission.resolve(self.mission.bid_costs))
+        for performer in self.performers:
+            performer.bid_costs = costs.get(performer.node_name)
 
     async def _wait_for_remote_performers(self) -> None:
         from plansys_bridge.performers.remote import wait_for_performers

@@ -28,7 +28,7 @@ import logging
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from plansys_bridge.errors import ConfigError, HubError
 from plansys_bridge.hub.messages import (
@@ -48,6 +48,9 @@ from plansys_bridge.performers.goal import (
     arguments_match,
     same_goal,
 )
+
+if TYPE_CHECKING:
+    from plansys_bridge.performers.bid_costs import BidCosts
 
 __all__ = [
     "ActionFailed",
@@ -110,6 +113,9 @@ class ActionPerformer(ABC):
         self._subs: list[Subscription] = []
         self._heartbeat_timer: asyncio.TimerHandle | None = None
         self._running = False
+        self.bid_costs: BidCosts | None = None
+        """Learned costs (the mission's ``bid_costs:``); where they know the action
+        they are bid instead of :meth:`bid`."""
 
     # ------------------------------------------------------------------ hooks
 
@@ -268,7 +274,8 @@ class ActionPerformer(ABC):
         try:
             if not self.accepts(goal):
                 return
-            cost = self.bid(goal)
+            learned = self.bid_costs.cost(goal.action, goal.arguments) if self.bid_costs else None
+            cost = learned if learned is not None else self.bid(goal)
         except Exception:
             log.exception("performer %s: bid/accepts for %s raised", self.node_name, goal.full_name)
             return

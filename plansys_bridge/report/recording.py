@@ -10,12 +10,13 @@ report of a recording is drawn exactly as the report of a live run.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from plansys_bridge.hub import messages as hm
-from plansys_bridge.monitoring.watch import MissionWatch
+from plansys_bridge.monitoring.watch import Listener, MissionWatch
 from plansys_bridge.report.model import ReportError
 
 __all__ = ["RecordingError", "watch_recording"]
@@ -41,10 +42,71 @@ def _topics() -> dict[str, tuple[str, str]]:
     }
 
 
-def watch_recording(path: str | Path) -> tuple[MissionWatch, float, float]:
-    """The watch fed with every mission message of the bag at ``path``; with the
-    log times of the first and the last message (mission seconds)."""
-    from plansys_bridge.hub.dds_convert import hub_decoder
+def watch_recording(
+    path: str | Path, listener: Listener | None = None
+) -> tuple[MissionWatch, float, float]:
+    """The watch fed with every mission message of the bag at ``path`` (each change
+    also handed to ``listener``); with the log times of the first and the last
+    message (mission seconds).
+
+    MCAP recordings (what ``--record`` writes) are read front to back, so damage or
+    a recording cut short is one error naming the file and the byte offset; other
+    bag formats go through rosbags' reader.
+    """
+    from plansys_bridge.monitoring.mcap_scan import mcap_files
+
+    path = Path(path)
+    if not path.exists():
+        raise RecordingError(f"{path}: no such recording")
+    stamp = [0.0]
+    watch = MissionWatch(lambda: stamp[0], listener)
+    topics = _topics()
+    files = mcap_files(path)
+    messages = _scan(files, topics) if files else _any_reader(path, topics)
+    first: float | None = None
+    last = 0.0
+    for topic, ros, now in messages:
+        hub_topic, kind = topics[topic]
+        first = now if first is None else first
+        last = max(last, now)
+        stamp[0] = now
+        watch.feed(hub_topic, _convert(kind, ros), now)
+    if first is None:
+        raise RecordingError(f"{path}: no mission topics (expected {', '.join(sorted(topics))})")
+    return watch, first, last
+
+
+Recorded = Iterator[tuple[str, Any, float]]
+"""(bag topic, ROS message, log time in seconds) in log-time order."""
+
+
+def _scan(files: list[Path], topics: dict[str, tuple[str, str]]) -> Recorded:
+    from plansys_bridge.monitoring import msgs
+    from plansys_bridge.monitoring.mcap_scan import McapScanError, scan_mcap
+    from plansys_bridge.monitoring.recorder import BRIDGE_PREFIX
+
+    store = msgs.hub_typestore()
+    found = []
+    try:
+        for file in files:
+            found += list(scan_mcap(file, set(topics)))
+    except McapScanError as exc:
+        raise RecordingError(str(exc)) from exc
+    present = {m.topic for m in found}
+    # the bridge topics carry the same messages with their ids
+    skip = {t for t in topics if BRIDGE_PREFIX + t in present}
+    found = sorted((m for m in found if m.topic not in skip), key=lambda m: m.log_time)
+    for m in found:
+        try:
+            ros = store.deserialize_cdr(m.data, m.msgtype)
+        except Exception as exc:  # rosbags raises several kinds on a bad payload
+            raise RecordingError(
+                f"{m.place}: cannot decode {m.topic} as {m.msgtype or 'an unknown type'}: {exc}"
+            ) from exc
+        yield m.topic, ros, m.log_time / 1e9
+
+
+def _any_reader(path: Path, topics: dict[str, tuple[str, str]]) -> Recorded:
     from plansys_bridge.monitoring import msgs
     from plansys_bridge.monitoring.recorder import BRIDGE_PREFIX
     from plansys_bridge.monitoring.rosbags_api import (
@@ -54,44 +116,22 @@ def watch_recording(path: str | Path) -> tuple[MissionWatch, float, float]:
         SerdeError,
     )
 
-    path = Path(path)
-    if not path.exists():
-        raise RecordingError(f"{path}: no such recording")
-    stamp = [0.0]
-    watch = MissionWatch(lambda: stamp[0])
-    topics = _topics()
-    decoders = {
-        "info": hub_decoder(hm.ActionExecutionInfo, msgs.ACTION_EXECUTION_INFO),
-        "execution": hub_decoder(hm.ActionExecution, msgs.ACTION_EXECUTION),
-        "status": hub_decoder(hm.ActionPerformerStatus, msgs.ACTION_PERFORMER_STATUS),
-        "plan": hub_decoder(hm.Plan, msgs.PLAN),
-    }
-    first: float | None = None
-    last = 0.0
     try:
         with AnyReader([path], default_typestore=msgs.hub_typestore()) as reader:
             present = {c.topic for c in reader.connections}
-            # the bridge topics carry the same messages with their ids
             skip = {t for t in topics if BRIDGE_PREFIX + t in present}
             conns = [c for c in reader.connections if c.topic in topics and c.topic not in skip]
-            if not conns:
-                raise RecordingError(
-                    f"{path}: no mission topics (expected {', '.join(sorted(topics))})"
-                )
             for conn, timestamp, raw in reader.messages(conns):
-                ros: Any = reader.deserialize(raw, conn.msgtype)
-                hub_topic, kind = topics[conn.topic]
-                now = timestamp / 1e9
-                first = now if first is None else first
-                last = max(last, now)
-                stamp[0] = now
-                watch.feed(hub_topic, _convert(kind, ros, decoders), now)
+                yield conn.topic, reader.deserialize(raw, conn.msgtype), timestamp / 1e9
     except (AnyReaderError, ReaderError, SerdeError, OSError, KeyError, ValueError) as exc:
         raise RecordingError(f"{path}: cannot read recording: {exc}") from exc
-    return watch, first or 0.0, last
 
 
-def _convert(kind: str, ros: Any, decoders: dict[str, Any]) -> object:
+_DECODERS: dict[str, Any] = {}
+
+
+def _convert(kind: str, ros: Any) -> object:
+    decoders = _decoders()
     if kind == "plan":
         return hm.ExecutingPlan(decoders["plan"](ros), "")
     if kind == "bridge_plan":
@@ -102,3 +142,18 @@ def _convert(kind: str, ros: Any, decoders: dict[str, Any]) -> object:
     if kind == "dot":
         return hm.DotGraph(ros.data)
     return decoders[kind](ros)
+
+
+def _decoders() -> dict[str, Any]:
+    """ROS message -> hub message, per kind of topic (built once)."""
+    if not _DECODERS:
+        from plansys_bridge.hub.dds_convert import hub_decoder
+        from plansys_bridge.monitoring import msgs
+
+        _DECODERS.update(
+            info=hub_decoder(hm.ActionExecutionInfo, msgs.ACTION_EXECUTION_INFO),
+            execution=hub_decoder(hm.ActionExecution, msgs.ACTION_EXECUTION),
+            status=hub_decoder(hm.ActionPerformerStatus, msgs.ACTION_PERFORMER_STATUS),
+            plan=hub_decoder(hm.Plan, msgs.PLAN),
+        )
+    return _DECODERS
