@@ -10,35 +10,20 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.pddl.model import (
-    AddEffect,
     And,
-    AndEffect,
     AnyAction,
     Atom,
-    BinaryOp,
-    Compare,
     Condition,
-    DeleteEffect,
     DurationRef,
     Effect,
-    Equals,
-    Exists,
-    FluentRef,
-    Forall,
-    ForallEffect,
-    Imply,
-    Negate,
-    Not,
     Number,
-    NumericEffect,
     NumExpr,
-    Or,
-    TypedName,
-    WhenEffect,
 )
+from plansys_bridge.pddl.walkers import Transformer, bound_variables
 
 
 class UnboundVariableError(KnowledgeError):
@@ -71,76 +56,53 @@ def ground_args(args: tuple[str, ...], bindings: Mapping[str, str]) -> tuple[str
         raise UnboundVariableError(f"variable {exc.args[0]} is not bound") from None
 
 
-def _shadow(bindings: Mapping[str, str], variables: tuple[TypedName, ...]) -> Mapping[str, str]:
-    names = {v.name for v in variables}
-    if not names.intersection(bindings):
-        return bindings
-    return {k: v for k, v in bindings.items() if k not in names}
-
-
 def _sub_args(args: tuple[str, ...], b: Mapping[str, str]) -> tuple[str, ...]:
     return tuple(b.get(a, a) if a[:1] == "?" else a for a in args)
 
 
+class _Substitute(Transformer):
+    """Replaces bound variables; a quantifier's own variables shadow outer bindings."""
+
+    def __init__(self, bindings: Mapping[str, str]) -> None:
+        self.b = bindings
+
+    def term(self, term: str) -> str:
+        return self.b.get(term, term) if term[:1] == "?" else term
+
+    def default(self, node: Any, *args: Any) -> Any:
+        names = bound_variables(node)
+        if names and not self.b.keys().isdisjoint(names):
+            inner = {k: v for k, v in self.b.items() if k not in names}
+            return _Substitute(inner).rebuild(node) if inner else node
+        return self.rebuild(node)
+
+    # fast paths: every ground action's conditions go through these
+    def walk_atom(self, atom: Atom) -> Atom:
+        return Atom(atom.predicate, _sub_args(atom.args, self.b), atom.loc)
+
+    def walk_and(self, cond: And) -> And:
+        return And(tuple(self.walk(c) for c in cond.operands))
+
+
 def substitute_expr(expr: NumExpr, b: Mapping[str, str]) -> NumExpr:
-    if isinstance(expr, FluentRef):
-        return FluentRef(expr.name, _sub_args(expr.args, b), expr.loc)
-    if isinstance(expr, BinaryOp):
-        return BinaryOp(expr.op, substitute_expr(expr.left, b), substitute_expr(expr.right, b))
-    if isinstance(expr, Negate):
-        return Negate(substitute_expr(expr.operand, b))
-    return expr  # Number, DurationRef
+    result: NumExpr = _Substitute(b).walk(expr)
+    return result
 
 
 def substitute_condition(cond: Condition, b: Mapping[str, str]) -> Condition:
     """``cond`` with bound variables replaced; unbound ones are kept as variables."""
     if not b:
         return cond
-    if isinstance(cond, Atom):
-        return Atom(cond.predicate, _sub_args(cond.args, b), cond.loc)
-    if isinstance(cond, And):
-        return And(tuple(substitute_condition(c, b) for c in cond.operands))
-    if isinstance(cond, Not):
-        return Not(substitute_condition(cond.operand, b))
-    if isinstance(cond, Or):
-        return Or(tuple(substitute_condition(c, b) for c in cond.operands))
-    if isinstance(cond, Imply):
-        return Imply(
-            substitute_condition(cond.antecedent, b), substitute_condition(cond.consequent, b)
-        )
-    if isinstance(cond, Exists):
-        return Exists(cond.variables, substitute_condition(cond.body, _shadow(b, cond.variables)))
-    if isinstance(cond, Forall):
-        return Forall(cond.variables, substitute_condition(cond.body, _shadow(b, cond.variables)))
-    if isinstance(cond, Equals):
-        return Equals(b.get(cond.left, cond.left), b.get(cond.right, cond.right))
-    if isinstance(cond, Compare):
-        return Compare(cond.op, substitute_expr(cond.left, b), substitute_expr(cond.right, b))
-    raise TypeError(f"not a condition: {cond!r}")
+    result: Condition = _Substitute(b).walk(cond)
+    return result
 
 
 def substitute_effect(effect: Effect, b: Mapping[str, str]) -> Effect:
     """``effect`` with bound variables replaced."""
     if not b:
         return effect
-    if isinstance(effect, AddEffect):
-        return AddEffect(substitute_condition(effect.atom, b))  # type: ignore[arg-type]
-    if isinstance(effect, DeleteEffect):
-        return DeleteEffect(substitute_condition(effect.atom, b))  # type: ignore[arg-type]
-    if isinstance(effect, NumericEffect):
-        fluent = FluentRef(effect.fluent.name, _sub_args(effect.fluent.args, b), effect.fluent.loc)
-        return NumericEffect(effect.op, fluent, substitute_expr(effect.value, b))
-    if isinstance(effect, AndEffect):
-        return AndEffect(tuple(substitute_effect(e, b) for e in effect.effects))
-    if isinstance(effect, WhenEffect):
-        return WhenEffect(
-            substitute_condition(effect.condition, b), substitute_effect(effect.effect, b)
-        )
-    if isinstance(effect, ForallEffect):
-        return ForallEffect(
-            effect.variables, substitute_effect(effect.effect, _shadow(b, effect.variables))
-        )
-    raise TypeError(f"not an effect: {effect!r}")
+    result: Effect = _Substitute(b).walk(effect)
+    return result
 
 
 @dataclass(frozen=True, eq=False)

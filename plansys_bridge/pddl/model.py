@@ -9,6 +9,11 @@ a cheap tuple substitution.
 
 Source locations are kept on the nodes a user can get wrong (declarations and uses)
 but excluded from equality, so a round-tripped model compares equal.
+
+Conditions, effects and numeric expressions are walked through
+:mod:`plansys_bridge.pddl.walkers`, which reads each node's children off these
+field types. A construct that can be written with older ones says so in a
+``lower()`` method, and every walk without a method of its own for it uses that.
 """
 
 from __future__ import annotations
@@ -154,6 +159,10 @@ class Imply:
     antecedent: Condition
     consequent: Condition
 
+    def lower(self) -> Condition:
+        """``(or (not a) b)``: what a walk without an ``imply`` of its own sees."""
+        return Or((Not(self.antecedent), self.consequent))
+
 
 @dataclass(frozen=True)
 class Exists:
@@ -165,6 +174,10 @@ class Exists:
 class Forall:
     variables: tuple[TypedName, ...]
     body: Condition
+
+    def lower(self) -> Condition:
+        """``(not (exists (...) (not body)))``, for walks without a ``forall`` of their own."""
+        return Not(Exists(self.variables, Not(self.body)))
 
 
 @dataclass(frozen=True)

@@ -46,8 +46,10 @@ from plansys_bridge.pddl.model import (
     TypedName,
     WhenEffect,
 )
+from plansys_bridge.pddl.walkers import Visitor
 
 __all__ = [
+    "PddlWriter",
     "write_atom",
     "write_condition",
     "write_domain",
@@ -83,52 +85,83 @@ def write_atom(atom: Atom) -> str:
     return _app(atom.predicate, atom.args)
 
 
-def write_num_expr(expr: NumExpr) -> str:
-    if isinstance(expr, Number):
+class PddlWriter(Visitor[str]):
+    """One PDDL form per node; a construct without one is written as its ``lower()``."""
+
+    def walk_number(self, expr: Number) -> str:
         return write_number(expr.value)
-    if isinstance(expr, FluentRef):
+
+    def walk_fluent_ref(self, expr: FluentRef) -> str:
         return _app(expr.name, expr.args)
-    if isinstance(expr, DurationRef):
+
+    def walk_duration_ref(self, expr: DurationRef) -> str:
         return "?duration"
-    if isinstance(expr, BinaryOp):
-        return f"({expr.op} {write_num_expr(expr.left)} {write_num_expr(expr.right)})"
-    assert isinstance(expr, Negate)
-    return f"(- {write_num_expr(expr.operand)})"
+
+    def walk_binary_op(self, expr: BinaryOp) -> str:
+        return f"({expr.op} {self.walk(expr.left)} {self.walk(expr.right)})"
+
+    def walk_negate(self, expr: Negate) -> str:
+        return f"(- {self.walk(expr.operand)})"
+
+    def walk_atom(self, cond: Atom) -> str:
+        return _app(cond.predicate, cond.args)
+
+    def walk_and(self, cond: And) -> str:
+        return _app("and", (self.walk(c) for c in cond.operands))
+
+    def walk_or(self, cond: Or) -> str:
+        return _app("or", (self.walk(c) for c in cond.operands))
+
+    def walk_not(self, cond: Not) -> str:
+        return f"(not {self.walk(cond.operand)})"
+
+    def walk_imply(self, cond: Imply) -> str:
+        return f"(imply {self.walk(cond.antecedent)} {self.walk(cond.consequent)})"
+
+    def walk_exists(self, cond: Exists) -> str:
+        return f"(exists ({_typed(cond.variables)}) {self.walk(cond.body)})"
+
+    def walk_forall(self, cond: Forall) -> str:
+        return f"(forall ({_typed(cond.variables)}) {self.walk(cond.body)})"
+
+    def walk_compare(self, cond: Compare) -> str:
+        return f"({cond.op} {self.walk(cond.left)} {self.walk(cond.right)})"
+
+    def walk_equals(self, cond: Equals) -> str:
+        return f"(= {cond.left} {cond.right})"
+
+    def walk_add_effect(self, eff: AddEffect) -> str:
+        return self.walk(eff.atom)
+
+    def walk_delete_effect(self, eff: DeleteEffect) -> str:
+        return f"(not {self.walk(eff.atom)})"
+
+    def walk_and_effect(self, eff: AndEffect) -> str:
+        return _app("and", (self.walk(e) for e in eff.effects))
+
+    def walk_when_effect(self, eff: WhenEffect) -> str:
+        return f"(when {self.walk(eff.condition)} {self.walk(eff.effect)})"
+
+    def walk_forall_effect(self, eff: ForallEffect) -> str:
+        return f"(forall ({_typed(eff.variables)}) {self.walk(eff.effect)})"
+
+    def walk_numeric_effect(self, eff: NumericEffect) -> str:
+        return f"({eff.op} {self.walk(eff.fluent)} {self.walk(eff.value)})"
+
+
+_WRITER = PddlWriter()
+
+
+def write_num_expr(expr: NumExpr) -> str:
+    return _WRITER.walk(expr)
 
 
 def write_condition(cond: Condition) -> str:
-    if isinstance(cond, Atom):
-        return write_atom(cond)
-    if isinstance(cond, And):
-        return _app("and", (write_condition(c) for c in cond.operands))
-    if isinstance(cond, Or):
-        return _app("or", (write_condition(c) for c in cond.operands))
-    if isinstance(cond, Not):
-        return f"(not {write_condition(cond.operand)})"
-    if isinstance(cond, Imply):
-        return f"(imply {write_condition(cond.antecedent)} {write_condition(cond.consequent)})"
-    if isinstance(cond, Exists | Forall):
-        word = "exists" if isinstance(cond, Exists) else "forall"
-        return f"({word} ({_typed(cond.variables)}) {write_condition(cond.body)})"
-    if isinstance(cond, Compare):
-        return f"({cond.op} {write_num_expr(cond.left)} {write_num_expr(cond.right)})"
-    assert isinstance(cond, Equals)
-    return f"(= {cond.left} {cond.right})"
+    return _WRITER.walk(cond)
 
 
 def write_effect(eff: Effect) -> str:
-    if isinstance(eff, AddEffect):
-        return write_atom(eff.atom)
-    if isinstance(eff, DeleteEffect):
-        return f"(not {write_atom(eff.atom)})"
-    if isinstance(eff, AndEffect):
-        return _app("and", (write_effect(e) for e in eff.effects))
-    if isinstance(eff, WhenEffect):
-        return f"(when {write_condition(eff.condition)} {write_effect(eff.effect)})"
-    if isinstance(eff, ForallEffect):
-        return f"(forall ({_typed(eff.variables)}) {write_effect(eff.effect)})"
-    assert isinstance(eff, NumericEffect)
-    return f"({eff.op} {write_num_expr(eff.fluent)} {write_num_expr(eff.value)})"
+    return _WRITER.walk(eff)
 
 
 def write_fluent_value(value: FluentValue) -> str:

@@ -11,15 +11,13 @@ feature it does not know fails late and obscurely.
 from __future__ import annotations
 
 import enum
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable
+from typing import Any
 
 from plansys_bridge.pddl.model import (
     Action,
     AddEffect,
-    And,
-    AndEffect,
     Atom,
-    BinaryOp,
     Compare,
     Condition,
     DeleteEffect,
@@ -34,14 +32,13 @@ from plansys_bridge.pddl.model import (
     Forall,
     ForallEffect,
     Imply,
-    Negate,
     Not,
     NumericEffect,
-    NumExpr,
     Or,
     Problem,
     WhenEffect,
 )
+from plansys_bridge.pddl.walkers import Collector, iter_nodes
 
 
 class Capability(enum.Enum):
@@ -102,67 +99,83 @@ def required_capabilities(domain: Domain, problem: Problem | None = None) -> fro
 def _duration(constraint: DurationConstraint, found: set[Capability]) -> None:
     if constraint.op != "=":
         found.add(Capability.DURATION_INEQUALITIES)
-    if any(isinstance(e, FluentRef) for e in _num_nodes(constraint.value)):
+    if any(type(e) is FluentRef for e in iter_nodes(constraint.value)):
         found.add(Capability.NUMERIC_FLUENTS)
 
 
-def _num_nodes(expr: NumExpr) -> Iterator[NumExpr]:
-    yield expr
-    if isinstance(expr, BinaryOp):
-        yield from _num_nodes(expr.left)
-        yield from _num_nodes(expr.right)
-    elif isinstance(expr, Negate):
-        yield from _num_nodes(expr.operand)
+class _Features(Collector):
+    """Adds the capability each construct needs; constructs that need none are
+    recursed into, and a construct with a ``lower()`` needs what its lowered form
+    needs."""
+
+    kinds = ("condition", "effect")
+
+    def __init__(self, found: set[Capability]) -> None:
+        self.found = found
+
+    def default(self, node: Any, *args: Any) -> None:
+        lower = getattr(node, "lower", None)
+        if lower is not None:
+            self.walk(lower())
+        else:
+            super().default(node)
+
+    def walk_atom(self, cond: Atom) -> None:
+        return None
+
+    def walk_equals(self, cond: Equals) -> None:
+        self.found.add(Capability.EQUALITY)
+
+    def walk_not(self, cond: Not) -> None:
+        self.found.add(Capability.NEGATIVE_PRECONDITIONS)
+        if type(cond.operand) not in (Atom, Equals):
+            self.found.add(Capability.DISJUNCTIVE_PRECONDITIONS)
+        self.walk(cond.operand)
+
+    def walk_or(self, cond: Or) -> None:
+        self.found.add(Capability.DISJUNCTIVE_PRECONDITIONS)
+        super().default(cond)
+
+    def walk_imply(self, cond: Imply) -> None:
+        self.found.add(Capability.DISJUNCTIVE_PRECONDITIONS)
+        super().default(cond)
+
+    def walk_exists(self, cond: Exists) -> None:
+        self.found.add(Capability.EXISTENTIAL_PRECONDITIONS)
+        super().default(cond)
+
+    def walk_forall(self, cond: Forall) -> None:
+        self.found.add(Capability.UNIVERSAL_PRECONDITIONS)
+        super().default(cond)
+
+    def walk_compare(self, cond: Compare) -> None:
+        self.found.add(Capability.NUMERIC_FLUENTS)
+
+    def walk_add_effect(self, eff: AddEffect | DeleteEffect) -> None:
+        return None
+
+    walk_delete_effect = walk_add_effect
+
+    def walk_numeric_effect(self, eff: NumericEffect) -> None:
+        self.found.add(Capability.NUMERIC_FLUENTS)
+        if any(type(e) is DurationRef for e in iter_nodes(eff.value)):
+            self.found.add(Capability.DURATIVE_ACTIONS)
+
+    def walk_when_effect(self, eff: WhenEffect) -> None:
+        self.found.add(Capability.CONDITIONAL_EFFECTS)
+        super().default(eff)
+
+    def walk_forall_effect(self, eff: ForallEffect) -> None:
+        self.found.add(Capability.CONDITIONAL_EFFECTS)
+        super().default(eff)
 
 
 def _condition(cond: Condition, found: set[Capability]) -> None:
-    if isinstance(cond, Atom):
-        return
-    if isinstance(cond, Equals):
-        found.add(Capability.EQUALITY)
-    elif isinstance(cond, Not):
-        found.add(Capability.NEGATIVE_PRECONDITIONS)
-        if not isinstance(cond.operand, Atom | Equals):
-            found.add(Capability.DISJUNCTIVE_PRECONDITIONS)
-        _condition(cond.operand, found)
-    elif isinstance(cond, And):
-        for op in cond.operands:
-            _condition(op, found)
-    elif isinstance(cond, Or):
-        found.add(Capability.DISJUNCTIVE_PRECONDITIONS)
-        for op in cond.operands:
-            _condition(op, found)
-    elif isinstance(cond, Imply):
-        found.add(Capability.DISJUNCTIVE_PRECONDITIONS)
-        _condition(cond.antecedent, found)
-        _condition(cond.consequent, found)
-    elif isinstance(cond, Exists):
-        found.add(Capability.EXISTENTIAL_PRECONDITIONS)
-        _condition(cond.body, found)
-    elif isinstance(cond, Forall):
-        found.add(Capability.UNIVERSAL_PRECONDITIONS)
-        _condition(cond.body, found)
-    elif isinstance(cond, Compare):
-        found.add(Capability.NUMERIC_FLUENTS)
+    _Features(found).walk(cond)
 
 
 def _effect(eff: Effect, found: set[Capability]) -> None:
-    if isinstance(eff, AddEffect | DeleteEffect):
-        return
-    if isinstance(eff, NumericEffect):
-        found.add(Capability.NUMERIC_FLUENTS)
-        if any(isinstance(e, DurationRef) for e in _num_nodes(eff.value)):
-            found.add(Capability.DURATIVE_ACTIONS)
-    elif isinstance(eff, AndEffect):
-        for sub in eff.effects:
-            _effect(sub, found)
-    elif isinstance(eff, WhenEffect):
-        found.add(Capability.CONDITIONAL_EFFECTS)
-        _condition(eff.condition, found)
-        _effect(eff.effect, found)
-    elif isinstance(eff, ForallEffect):
-        found.add(Capability.CONDITIONAL_EFFECTS)
-        _effect(eff.effect, found)
+    _Features(found).walk(eff)
 
 
 def _has_windows(domain: Domain) -> bool:
@@ -172,14 +185,10 @@ def _has_windows(domain: Domain) -> bool:
     for action in domain.actions:
         if isinstance(action, DurativeAction):
             added = {
-                e.atom.predicate
-                for e in _leaf_effects(action.start_effect)
-                if isinstance(e, AddEffect)
+                e.atom.predicate for e in iter_nodes(action.start_effect) if type(e) is AddEffect
             }
             deleted = {
-                e.atom.predicate
-                for e in _leaf_effects(action.end_effect)
-                if isinstance(e, DeleteEffect)
+                e.atom.predicate for e in iter_nodes(action.end_effect) if type(e) is DeleteEffect
             }
             windows |= {(p, action.name) for p in added & deleted}
     if not windows:
@@ -190,32 +199,7 @@ def _has_windows(domain: Domain) -> bool:
             if isinstance(action, DurativeAction)
             else (action.precondition,)
         )
-        read = {a.predicate for c in conds for a in _atoms(c)}
+        read = {a.predicate for c in conds for a in iter_nodes(c) if type(a) is Atom}
         if any(p in read and owner != action.name for p, owner in windows):
             return True
     return False
-
-
-def _leaf_effects(eff: Effect) -> Iterator[Effect]:
-    if isinstance(eff, AndEffect):
-        for sub in eff.effects:
-            yield from _leaf_effects(sub)
-    elif isinstance(eff, WhenEffect | ForallEffect):
-        yield from _leaf_effects(eff.effect)
-    else:
-        yield eff
-
-
-def _atoms(cond: Condition) -> Iterator[Atom]:
-    if isinstance(cond, Atom):
-        yield cond
-    elif isinstance(cond, And | Or):
-        for op in cond.operands:
-            yield from _atoms(op)
-    elif isinstance(cond, Not):
-        yield from _atoms(cond.operand)
-    elif isinstance(cond, Imply):
-        yield from _atoms(cond.antecedent)
-        yield from _atoms(cond.consequent)
-    elif isinstance(cond, Exists | Forall):
-        yield from _atoms(cond.body)
