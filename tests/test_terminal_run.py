@@ -47,13 +47,22 @@ clock: {{kind: virtual}}
 """
 
 
-def _terminal(tmp_path: Path, success: float = 1.0) -> tuple[Terminal, io.StringIO]:
+def _terminal(
+    tmp_path: Path, success: float = 1.0, console: object = None
+) -> tuple[Terminal, io.StringIO]:
     file = tmp_path / "mission.yaml"
     file.write_text(MISSION.format(domain=SIMPLE_DOMAIN, success=success))
     mission = load_mission(file)
     knowledge = build_knowledge(mission, DomainExpert.from_files(list(mission.domain_paths)).domain)
     out = io.StringIO()
-    runner = MissionRunner(mission, knowledge, _planner, out=lambda line: out.write(line + "\n"))
+    runner = MissionRunner(
+        mission,
+        knowledge,
+        _planner,
+        out=lambda line: out.write(line + "\n"),
+        live=console is not None,
+        console=console,
+    )
     term = Terminal(knowledge.domain_expert, knowledge, runner=runner, base_dir=tmp_path)
     return term, out
 
@@ -199,3 +208,80 @@ def test_cli_mission_runs_plans_with_its_performers(tmp_path: Path) -> None:
     last = text.split("(robot_at leia kitchen)\n")[-1]
     assert last.startswith("error: execution rejected: ")
     assert "(move leia kitchen dinning)" in last and "(connected kitchen dinning)" in last
+
+
+def test_plain_progress_shows_completion_from_feedback(tmp_path: Path) -> None:
+    """Not a terminal: one line per change, and completion at each quarter."""
+    term, progress = _terminal(tmp_path)
+    _charged(term)
+    assert term.execute_line("run action (move leia entrance dinning)").startswith("succeeded")
+    lines = progress.getvalue().splitlines()
+    quarters = [line.split("] ", 1)[1] for line in lines if "PROGRESS" in line]
+    assert quarters == [
+        f"PROGRESS  (move leia entrance dinning) {pct} % (leia_base)" for pct in (25, 50, 75)
+    ]
+    executing = next(i for i, line in enumerate(lines) if "EXECUTING" in line)
+    succeeded = next(i for i, line in enumerate(lines) if "SUCCEEDED" in line)
+    assert executing < min(i for i, line in enumerate(lines) if "PROGRESS" in line) < succeeded
+
+
+def test_live_table_on_a_terminal(tmp_path: Path) -> None:
+    """On a terminal: the live table (state, completion, performer; performers under
+    it), failures and replans printed above it, no per-change lines."""
+    rich_console = pytest.importorskip("rich.console", reason="the ui extra (rich) is missing")
+    screen = io.StringIO()
+    console = rich_console.Console(file=screen, force_terminal=True, width=160, color_system=None)
+    term, progress = _terminal(tmp_path, success=0.0, console=console)
+    out = term.execute_line("run")
+    assert out.startswith("error: execution failed: ")
+    assert progress.getvalue() == ""
+    drawn = screen.getvalue()
+    assert "terminal_run  t=" in drawn and "plan 1 (3 actions)" in drawn
+    assert "(askcharge leia entrance chargingroom)" in drawn and "leia_base" in drawn
+    assert "│ failed " in drawn
+    assert "performers  leia_base: " in drawn
+    assert "FAILED    (askcharge leia entrance chargingroom)" in drawn
+    assert "replanned (plan 2, " in drawn
+    # a succeeding run ends with the whole plan drawn done
+    screen = io.StringIO()
+    console = rich_console.Console(file=screen, force_terminal=True, width=160, color_system=None)
+    term, _ = _terminal(tmp_path, console=console)
+    assert term.execute_line("run").startswith("succeeded")
+    final = screen.getvalue()
+    final = final[final.rindex("plan 1 (3 actions)") :]
+    assert final.count("100 %") == 3 and final.count("succeeded") == 3
+
+
+class _Tty(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_cli_draws_the_live_table_when_its_output_is_a_terminal(tmp_path: Path) -> None:
+    pytest.importorskip("rich.console", reason="the ui extra (rich) is missing")
+    mission = tmp_path / "mission.yaml"
+    mission.write_text(MISSION.format(domain=SIMPLE_DOMAIN, success=1.0))
+    screen = _Tty()
+    code = terminal_cmd.run(_cli_args("--mission", str(mission)), io.StringIO("run\n"), screen)
+    text = screen.getvalue()
+    assert code == 0, text
+    assert "terminal_run  t=" in text and "100 %" in text
+    assert "EXECUTING (" not in text  # the table, not the plain lines
+    assert "succeeded\n  SUCCEEDED (askcharge leia entrance chargingroom)" in text
+
+
+def test_cli_no_performers_needs_a_dds_mission(tmp_path: Path) -> None:
+    from plansys_bridge.errors import ConfigError
+
+    mission = tmp_path / "mission.yaml"
+    mission.write_text(MISSION.format(domain=SIMPLE_DOMAIN, success=1.0))
+    with pytest.raises(ConfigError, match=r"transport.kind.*need transport: \{kind: dds\}"):
+        terminal_cmd.run(
+            _cli_args("--mission", str(mission), "--no-performers"), io.StringIO(""), io.StringIO()
+        )
+    assert (
+        terminal_cmd.run(
+            _cli_args("--no-performers", str(SIMPLE_DOMAIN)), io.StringIO(""), io.StringIO()
+        )
+        == 2
+    )

@@ -6,7 +6,11 @@ end of input. With ``--mission M.yaml`` the domain, the initial knowledge and th
 performers come from a mission file, and ``run`` executes plans with those
 performers (each ``run`` starts them, executes with live progress, and stops them;
 the mission's timed events are not replayed), and ``check actors`` lists the
-performers from their heartbeats. Without a mission the terminal plans but does not run.
+performers alive on the mission's hub from their heartbeats (over DDS, those of
+other processes too). ``--no-performers``: the mission's performers are served by
+``plansys-bridge performers`` in other processes over DDS. Progress is a live table
+on a terminal, one line per change otherwise. Without a mission the terminal plans
+but does not run.
 With stdin not a terminal (a pipe, a file, CI) no prompt is printed, so
 ``plansys-bridge terminal d.pddl < commands`` gives clean output. Exit status: 0,
 or 1 when a command failed in a non-interactive session, 2 for bad input files.
@@ -43,6 +47,12 @@ def register(subparsers: Any) -> None:
     parser.add_argument("domains", nargs="*", metavar="DOMAIN", help="domain file(s)")
     parser.add_argument(
         "--mission", metavar="YAML", help="take domain, knowledge and performers from a mission"
+    )
+    parser.add_argument(
+        "--no-performers",
+        action="store_true",
+        help="with --mission: the performers run in other processes "
+        "(`plansys-bridge performers`, needs transport: {kind: dds})",
     )
     parser.add_argument("--problem", metavar="FILE", help="load this problem first")
     parser.add_argument(
@@ -82,6 +92,15 @@ def _line_writer(out: _ErrorCounter) -> Callable[[str], None]:
     return write
 
 
+def _console(stream: TextIO) -> Any:
+    """A rich console drawing on ``stream`` (None without rich: plain lines then)."""
+    try:
+        from rich.console import Console
+    except ImportError:
+        return None
+    return Console(file=stream, force_terminal=True)
+
+
 def run(args: argparse.Namespace, stdin: TextIO | None = None, stdout: TextIO | None = None) -> int:
     from plansys_bridge.knowledge.domain_expert import DomainExpert
     from plansys_bridge.knowledge.problem_expert import ProblemExpert
@@ -110,7 +129,19 @@ def run(args: argparse.Namespace, stdin: TextIO | None = None, stdout: TextIO | 
             mission, DomainExpert.from_files(list(mission.domain_paths)).domain
         )
         domain_expert = problem_expert.domain_expert
-        runner = MissionRunner(mission, problem_expert, planner, out=_line_writer(out))
+        stream = stdout if stdout is not None else sys.stdout
+        runner = MissionRunner(
+            mission,
+            problem_expert,
+            planner,
+            out=_line_writer(out),
+            local_performers=not args.no_performers,
+            live=stream.isatty(),
+            console=_console(stdout) if stdout is not None and stream.isatty() else None,
+        )
+    elif args.no_performers:
+        print("error: --no-performers needs --mission", file=sys.stderr)
+        return EXIT_BAD_INPUT
     else:
         domain_expert = DomainExpert.from_files(args.domains)
         problem_expert = ProblemExpert(domain_expert)

@@ -49,6 +49,7 @@ class MissionSession:
         out: Printer | None = None,
         performer_overrides: dict[str, Any] | None = None,
         local_performers: bool = True,
+        await_performers: bool = True,
     ) -> None:
         self.mission = mission
         self.domain = domain
@@ -57,7 +58,9 @@ class MissionSession:
         """The plans this process executes (request ids start with one of them)."""
         self.hub = Hub(make_transport(mission, domain, plan_ids=self.plan_ids), clock)
         self.local_performers = local_performers
-        """False: the performers run in other processes (DDS); wait for their heartbeats."""
+        """False: the performers run in other processes (DDS); wait for their heartbeats
+        (unless ``await_performers`` is False: ``check actors`` lists whoever is alive)."""
+        self.await_performers = await_performers
         self.out = out
         self.performers: list[ActionPerformer] = []
         self.recorder: Any = None
@@ -91,7 +94,7 @@ class MissionSession:
                     self.performers = performers_from_config(entries, context)
                 self._apply_bid_costs()
             await start_performers(self.performers, self._say)
-            if not self.local_performers:
+            if not self.local_performers and self.await_performers:
                 await self._wait_for_remote_performers()
             self.hub.publish(Topics.KNOWLEDGE, self.knowledge.to_msg())
             self._unsubscribe = self.knowledge.subscribe(

@@ -9,6 +9,7 @@ Only for a TTY: logs and pipes get :class:`~plansys_bridge.monitoring.progress.P
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from types import TracebackType
 from typing import Any
@@ -17,6 +18,8 @@ from plansys_bridge.hub.messages import ActionStatus
 from plansys_bridge.monitoring.watch import ActionView, MissionWatch, WatchEvent
 
 __all__ = ["LiveView", "make_live_view"]
+
+REFRESH_PER_SECOND = 8
 
 _STYLE = {
     ActionStatus.NOT_EXECUTED: "dim",
@@ -42,6 +45,7 @@ class LiveView:
         self.console = console if console is not None else Console()
         self.watch: MissionWatch | None = None
         self._live: Any = None
+        self._next_render = 0.0
 
     def bind(self, watch: MissionWatch) -> None:
         self.watch = watch
@@ -50,7 +54,10 @@ class LiveView:
         from rich.live import Live
 
         self._live = Live(
-            self.render(), console=self.console, refresh_per_second=8, transient=False
+            self.render(),
+            console=self.console,
+            refresh_per_second=REFRESH_PER_SECOND,
+            transient=False,
         )
         self._live.__enter__()
         return self
@@ -72,16 +79,23 @@ class LiveView:
 
     def __call__(self, event: WatchEvent) -> None:
         t = f"[{self.elapsed():8.1f}]"
+        line = None
         if event.kind == "plan" and event.plan is not None and event.plan.replan:
-            self.say(
-                f"{t} replanned (plan {event.plan.number + 1}, {len(event.plan.items)} actions)"
-            )
+            line = f"{t} replanned (plan {event.plan.number + 1}, {len(event.plan.items)} actions)"
         elif event.kind == "status" and event.action is not None:
             a = event.action
             if a.status in (ActionStatus.FAILED, ActionStatus.CANCELLED):
-                self.say(f"{t} {a.status.name:<9} {a.text} - {a.message}")
+                line = f"{t} {a.status.name:<9} {a.text} - {a.message}"
         if self._live is not None:
-            self._live.update(self.render())
+            # The table is rebuilt at most at the refresh rate (a virtual-clock run
+            # sends thousands of events a second), and drawn at once before a line
+            # is printed above it, so the scrollback shows the table of that moment.
+            now = time.monotonic()
+            if line is not None or now >= self._next_render:
+                self._next_render = now + 1.0 / REFRESH_PER_SECOND
+                self._live.update(self.render(), refresh=line is not None)
+        if line is not None:
+            self.say(line)
 
     def render(self) -> Any:
         from rich.console import Group

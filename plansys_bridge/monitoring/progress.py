@@ -2,8 +2,9 @@
 
 The format for logs and pipes (CI, ``| tee``): a status change of an action, the
 performer that won its auction (and how many bid), each replanned plan as soon as
-the executor starts it. Feedback is not printed (it would flood a log); the live
-view (:mod:`plansys_bridge.monitoring.live`) shows completion instead.
+the executor starts it, and an action's completion (from its performer's FEEDBACK)
+each time it passes a quarter: every FEEDBACK would flood a log. The live view
+(:mod:`plansys_bridge.monitoring.live`) shows completion as bars instead.
 """
 
 from __future__ import annotations
@@ -37,6 +38,8 @@ class ProgressLines:
         self.out = out
         self.elapsed = elapsed
         self.first_plan = first_plan
+        self._quarters: dict[int, int] = {}
+        """id of an action's view -> the last quarter of completion printed for it."""
 
     def __call__(self, event: WatchEvent) -> None:
         t = f"[{self.elapsed():8.1f}]"
@@ -55,6 +58,13 @@ class ProgressLines:
                 else ""
             )
             self.out(f"{t} {a.status.name:<9} {a.text}{extra}")
+        elif event.kind == "feedback" and event.action is not None:
+            a = event.action
+            quarter = min(3, int(a.completion * 4 + 1e-9))
+            if a.status == ActionStatus.EXECUTING and quarter > self._quarters.get(id(a), 0):
+                self._quarters[id(a)] = quarter
+                who = f" ({a.performer})" if a.performer else ""
+                self.out(f"{t} {'PROGRESS':<9} {a.text} {25 * quarter} %{who}")
         elif event.kind == "assigned" and event.action is not None:
             a = event.action
             bids = f"{a.bids} bid{'s' if a.bids != 1 else ''}"

@@ -76,6 +76,10 @@ class PerformerView:
     actions: dict[str, tuple[str, ...]] = field(default_factory=dict)
     """Action -> its specialised arguments (empty: any)."""
     last_seen: float = 0.0
+    """The stamp of its last heartbeat (the sender's clock)."""
+    heard: float = 0.0
+    """When its last heartbeat arrived, on this watch's clock (a performer in another
+    process stamps with its own clock, so "seen N s ago" is measured with this)."""
     current: str = ""
     """Text of the action it was confirmed for and has not finished."""
 
@@ -247,5 +251,6 @@ class MissionWatch:
         if msg.action:
             view.actions[msg.action] = tuple(msg.specialized_arguments)
         view.last_seen = msg.status_stamp or now
+        view.heard = now
         if changed:
             self._emit(WatchEvent("performer", now, performer=view))

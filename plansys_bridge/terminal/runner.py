@@ -26,7 +26,9 @@ class Actor:
     actions: tuple[str, ...]
     """The actions it serves, with specialised arguments (``move [leia]``)."""
     seen_ago: float
-    """Seconds (mission time) since its last heartbeat, when the listing was made."""
+    """Seconds since its last heartbeat arrived, when the listing was made, counted as
+    heartbeat periods are: real seconds on the wall clock (whatever its time scale),
+    mission seconds on the virtual clock."""
 
 
 class Runner(Protocol):

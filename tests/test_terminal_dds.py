@@ -1,0 +1,133 @@
+"""``check actors`` and ``run`` in the terminal over a DDS hub, with performers in
+another process (``plansys-bridge performers``) on the same domain (loopback)."""
+
+from __future__ import annotations
+
+import argparse
+import io
+import os
+import random
+import re
+import selectors
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("cyclonedds", reason="cyclonedds (extra 'dds') is not installed")
+
+from plansys_bridge.cli import terminal_cmd
+
+pytestmark = pytest.mark.timeout(120)
+
+PDDL = Path(__file__).resolve().parents[1] / "configs" / "pddl" / "flat_navigation.pddl"
+
+MISSION = """\
+name: {name}
+domain: {domain}
+knowledge:
+  instances: {{r1: robot, r2: robot, hall: room, kitchen: room, bedroom: room}}
+  predicates:
+    - (robot_at r1 hall)
+    - (robot_at r2 hall)
+    - (connected hall kitchen)
+    - (connected hall bedroom)
+  functions:
+    - (= (travel_time hall kitchen) 1)
+    - (= (travel_time hall bedroom) 1)
+goal: (and (visited r1 kitchen) (visited r2 bedroom))
+performers:
+{performers}
+transport: {{kind: dds, domain_id: {domain_id}, peer_timeout: 20}}
+clock: {{kind: wall, time_scale: 0.2}}
+"""
+
+REMOTE = """\
+  - {kind: simulated, name: r1_base, actions: {move: [r1]}, default_duration: 1.0}
+  - {kind: simulated, name: r2_base, actions: {move: [r2]}, default_duration: 1.0}"""
+
+LOCAL = """\
+  - {kind: simulated, name: r3_local, actions: {move: [r1]}, default_duration: 1.0}"""
+
+
+@pytest.fixture
+def domain_id() -> int:
+    return random.SystemRandom().randint(1, 232)
+
+
+def _mission(tmp_path: Path, name: str, performers: str, domain_id: int) -> Path:
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(
+        MISSION.format(name=name, domain=PDDL, performers=performers, domain_id=domain_id),
+        encoding="utf-8",
+    )
+    return path
+
+
+@pytest.fixture
+def remote_performers(tmp_path: Path, domain_id: int) -> Iterator[Path]:
+    """``plansys-bridge performers`` serving r1_base and r2_base in a subprocess."""
+    mission = _mission(tmp_path, "fleet", REMOTE, domain_id)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "plansys_bridge", "performers", str(mission), "--duration", "90"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=os.environ | {"PYTHONUNBUFFERED": "1"},
+    )
+    try:
+        assert proc.stdout is not None
+        with selectors.DefaultSelector() as sel:
+            sel.register(proc.stdout, selectors.EVENT_READ)
+            if not sel.select(30):
+                pytest.fail("the performers process said nothing within 30 s")
+        ready = proc.stdout.readline()
+        assert ready.startswith("performers ready: r1_base, r2_base"), ready
+        yield mission
+    finally:
+        proc.kill()
+        proc.communicate(timeout=10)
+
+
+def _args(*argv: str) -> argparse.Namespace:
+    parser = argparse.ArgumentParser()
+    terminal_cmd.register(parser.add_subparsers())
+    return parser.parse_args(["terminal", *argv])
+
+
+def _actors(text: str) -> dict[str, str]:
+    """``check actors`` output -> performer name -> the rest of its line."""
+    return dict(re.findall(r"^\t\[(\w+)\] (.*)$", text, flags=re.MULTILINE))
+
+
+def test_check_actors_hears_performers_of_other_processes(
+    tmp_path: Path, remote_performers: Path, domain_id: int
+) -> None:
+    mine = _mission(tmp_path, "operator", LOCAL, domain_id)
+    out = io.StringIO()
+    code = terminal_cmd.run(_args("--mission", str(mine)), io.StringIO("check actors\n"), out)
+    text = out.getvalue()
+    assert code == 0, text
+    assert text.startswith("Actors: 3\n"), text
+    actors = _actors(text)
+    assert set(actors) == {"r1_base", "r2_base", "r3_local"}
+    assert re.fullmatch(r"move \[r2\]\tREADY\tlast seen [01]\.\d s ago", actors["r2_base"])
+    assert actors["r1_base"].startswith("move [r1]\tREADY\t")
+
+
+def test_terminal_runs_plans_on_performers_of_another_process(remote_performers: Path) -> None:
+    out = io.StringIO()
+    commands = "check actors\nrun\nget problem predicates\n"
+    code = terminal_cmd.run(
+        _args("--mission", str(remote_performers), "--no-performers"), io.StringIO(commands), out
+    )
+    text = out.getvalue()
+    assert code == 0, text
+    # only the other process's performers: none was started here
+    assert set(_actors(text)) == {"r1_base", "r2_base"}
+    assert "succeeded\n" in text
+    assert "ASSIGNED  (move r1 hall kitchen) -> r1_base (1 bid)" in text
+    assert "ASSIGNED  (move r2 hall bedroom) -> r2_base (1 bid)" in text
+    assert "(visited r1 kitchen)" in text and "(visited r2 bedroom)" in text
