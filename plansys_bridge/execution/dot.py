@@ -1,14 +1,21 @@
 """The plan graph as Graphviz DOT, coloured by action state, with ordered sub-goals.
 
 PlanSys2 publishes such a graph on ``dot_graph`` for monitoring; here each node is
-an action (label: step, text, planned start and duration), each edge a dependency
-(tooltip: why), and a second cluster lists the goal's atoms in the order the plan
-achieves them, each linked to the action that achieves it.
+an action (label: step, text, planned start and duration, state), each edge a
+dependency (tooltip: why), and a second cluster lists the goal's atoms in the order
+the plan achieves them, each linked to the action that achieves it.
+
+Every statement is written by pydot, which quotes identifiers and attributes and
+turns a label's line breaks into DOT's ``\\n`` (the escape Graphviz breaks a line
+at), so labels render on two lines, never with a literal backslash-n.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from typing import Any
+
+import pydot
 
 from plansys_bridge.execution.plan_graph import PlanGraph
 from plansys_bridge.hub.messages import ActionStatus
@@ -23,17 +30,6 @@ STATUS_COLOURS: dict[ActionStatus, str] = {
     ActionStatus.FAILED: "tomato",
     ActionStatus.CANCELLED: "orange",
 }
-
-
-def _quote(text: str) -> str:
-    """A DOT string: quotes and backslashes escaped, line breaks as DOT's ``\\n``.
-
-    Escaping the backslash of a ``\\n`` already in ``text`` would show a literal
-    backslash-n in the picture, so labels carry real newlines and only here become
-    the escape Graphviz centres a line break for.
-    """
-    escaped = text.replace("\\", "\\\\").replace('"', '\\"')
-    return '"' + escaped.replace("\r\n", "\n").replace("\n", "\\n") + '"'
 
 
 def plan_graph_to_dot(
@@ -52,30 +48,26 @@ def plan_graph_to_dot(
 
 class IncrementalDot:
     """The DOT text of one plan, kept between publications: edges and sub-goals are
-    written once, and a status change rewrites only its node's line (the executor
-    publishes the graph while the plan runs, and rewriting a large graph on every
-    change made execution cost grow with the square of the plan's length)."""
+    written once, and a status change rewrites only its node's statement (the
+    executor publishes the graph while the plan runs, and writing a large graph
+    whole on every change made execution cost grow with the square of the plan's
+    length)."""
 
     def __init__(self, graph: PlanGraph, goal_atoms: Iterable[Atom] = (), *, name: str = "plan"):
         self._graph = graph
-        self._head = "\n".join(
-            [
-                f"digraph {_quote(name)} {{",
-                "  rankdir=LR;",
-                '  node [shape=box, style="rounded,filled"];',
-                '  subgraph "cluster_plan" {',
-                '    label="plan";',
-            ]
-        )
+        self._root = pydot.Dot(_text(name), graph_type="digraph", rankdir="LR")
+        self._root.set_node_defaults(shape="box", style="rounded,filled")
+        self._head = _opening(self._root) + _opening(pydot.Cluster("plan", label="plan"))
         self._nodes = [self._node(i, ActionStatus.NOT_EXECUTED) for i in range(len(graph.steps))]
         self._statuses = [ActionStatus.NOT_EXECUTED] * len(graph.steps)
-        self._tail = _tail(graph, goal_atoms)
+        self._tail = "}\n" + self._dependencies() + self._subgoals(goal_atoms) + "}\n"
         self._text: str | None = None
 
     def _node(self, i: int, status: ActionStatus) -> str:
         step = self._graph.steps[i]
         label = f"{i}: {step.text}\n[{step.time:.3f}, {step.duration:.3f}] {status.name.lower()}"
-        return f"    a{i} [label={_quote(label)}, fillcolor={STATUS_COLOURS[status]}];"
+        node = pydot.Node(f"a{i}", label=_text(label), fillcolor=STATUS_COLOURS[status])
+        return str(node.to_string()) + "\n"
 
     def set_status(self, i: int, status: ActionStatus) -> None:
         if self._statuses[i] is not status:
@@ -85,26 +77,52 @@ class IncrementalDot:
 
     def text(self) -> str:
         if self._text is None:
-            self._text = "\n".join((self._head, *self._nodes, self._tail))
+            self._text = "".join((self._head, *self._nodes, self._tail))
         return self._text
 
+    def _edge(self, src: str, dst: str, **attrs: str) -> str:
+        edge = pydot.Edge(src, dst)
+        for key, value in attrs.items():
+            edge.set(key, value)
+        edge.set_parent_graph(self._root)  # a digraph's edges are written "->"
+        return str(edge.to_string()) + "\n"
 
-def _tail(graph: PlanGraph, goal_atoms: Iterable[Atom]) -> str:
-    lines = ["  }"]
-    for src, dst, data in sorted(graph.graph.edges(data=True)):
-        lines.append(f"  a{src} -> a{dst} [tooltip={_quote(str(data.get('reason', '')))}];")
-    goals = graph.ordered_subgoals(goal_atoms)
-    if goals:
-        lines.append('  subgraph "cluster_goals" {')
-        lines.append('    label="ordered sub-goals";')
-        lines.append("    node [shape=ellipse, style=filled, fillcolor=lightblue];")
+    def _dependencies(self) -> str:
+        return "".join(
+            self._edge(f"a{src}", f"a{dst}", tooltip=_text(str(data.get("reason", ""))))
+            for src, dst, data in sorted(self._graph.graph.edges(data=True))
+        )
+
+    def _subgoals(self, goal_atoms: Iterable[Atom]) -> str:
+        goals = self._graph.ordered_subgoals(goal_atoms)
+        if not goals:
+            return ""
+        cluster = pydot.Cluster("goals", label="ordered sub-goals")
+        cluster.set_node_defaults(shape="ellipse", style="filled", fillcolor="lightblue")
         for k, (atom, _step) in enumerate(goals):
-            lines.append(f"    g{k} [label={_quote(f'{k + 1}. {atom}')}];")
+            cluster.add_node(pydot.Node(f"g{k}", label=_text(f"{k + 1}. {atom}")))
         for k in range(len(goals) - 1):
-            lines.append(f"    g{k} -> g{k + 1} [style=invis];")
-        lines.append("  }")
-        for k, (_atom, achiever) in enumerate(goals):
-            if achiever is not None:
-                lines.append(f"  a{achiever} -> g{k} [style=dashed, arrowhead=none];")
-    lines.append("}")
-    return "\n".join(lines) + "\n"
+            cluster.add_edge(pydot.Edge(f"g{k}", f"g{k + 1}", style="invis"))
+        cluster.set_parent_graph(self._root)  # its edges too are written "->"
+        links = "".join(
+            self._edge(f"a{achiever}", f"g{k}", style="dashed", arrowhead="none")
+            for k, (_atom, achiever) in enumerate(goals)
+            if achiever is not None
+        )
+        return str(cluster.to_string()) + links
+
+
+def _text(text: str) -> str:
+    """``text`` for pydot: pydot escapes quotes and line breaks, but Graphviz also
+    reads a backslash as the start of an escape (``\\n``, ``\\l``, ``\\N``), so a
+    backslash that is part of the text is doubled first, and ``\\r\\n`` kept one
+    line break (pydot writes ``\\r`` as Graphviz's right-justified break)."""
+    return text.replace("\\", "\\\\").replace("\r\n", "\n").replace("\r", "\n")
+
+
+def _opening(graph: Any) -> str:
+    """The statements pydot writes for ``graph`` (kind, name, attributes, defaults)
+    without its closing brace, so nodes can be added after it one by one."""
+    text = str(graph.to_string())
+    assert text.endswith("}\n"), text
+    return text[: -len("}\n")]

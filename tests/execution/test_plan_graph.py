@@ -8,6 +8,11 @@ that share nothing must not wait for each other).
 
 from __future__ import annotations
 
+import html
+import re
+import shutil
+import subprocess
+
 import networkx as nx
 import pytest
 from execution_helpers import door_setup, knowledge_from, load_domain
@@ -189,7 +194,7 @@ def test_ordered_subgoals_and_dot() -> None:
     statuses = [ActionStatus.SUCCEEDED] * 3 + [ActionStatus.EXECUTING]
     statuses += [ActionStatus.NOT_EXECUTED] * 5
     dot = plan_graph_to_dot(graph, statuses, goals)
-    assert dot.startswith('digraph "plan"')
+    assert dot.startswith("digraph plan {\nrankdir=LR;")
     assert 'a0 [label="0: (move robot3 assembly_zone wheels_zone)' in dot
     # one DOT line break between the action and its times (a doubled backslash
     # would show a literal \n in the rendered picture)
@@ -199,6 +204,40 @@ def test_ordered_subgoals_and_dot() -> None:
     assert 'g0 [label="1. (car_assembled car_1)"]' in dot
     assert "a6 -> g0" in dot
     assert "a3 -> a6" in dot
+
+
+def _factory_dot() -> str:
+    domain = load_domain("factory.pddl")
+    k = knowledge_from(domain, "problem_factory_1.pddl")
+    graph = build_plan_graph(parse_plan(FACTORY_PLAN), domain, k.state())
+    goals = [Atom("car_assembled", ("car_1",))]
+    return plan_graph_to_dot(graph, [ActionStatus.SUCCEEDED], goals, name="plan-1/0")
+
+
+@pytest.mark.skipif(shutil.which("dot") is None, reason="Graphviz (dot) is not installed")
+def test_dot_labels_render_on_two_lines_with_graphviz() -> None:
+    svg = subprocess.run(
+        ["dot", "-Tsvg"], input=_factory_dot(), capture_output=True, text=True, check=True
+    ).stdout
+    texts = [html.unescape(t) for t in re.findall(r"<text[^>]*>([^<]*)</text>", svg)]
+    assert "0: (move robot3 assembly_zone wheels_zone)" in texts
+    assert "[0.000, 5.000] succeeded" in texts
+    assert "[5.001, 5.000] not_executed" in texts
+    assert "1. (car_assembled car_1)" in texts
+    assert not any("\\" in t for t in texts), [t for t in texts if "\\" in t]
+
+
+def test_dot_reads_back_with_pydot() -> None:
+    pydot = pytest.importorskip("pydot")
+    [graph] = pydot.graph_from_dot_data(_factory_dot())
+    assert graph.get_name() == '"plan-1/0"'
+    [plan, _goals] = graph.get_subgraphs()
+    labels = {n.get_name(): n.get("label") for n in plan.get_nodes() if n.get("label")}
+    # DOT's one-character escape between the two lines, as Graphviz reads it
+    assert labels["a0"] == '"0: (move robot3 assembly_zone wheels_zone)\\n[0.000, 5.000] succeeded"'
+    assert len(labels) == 9 and all(label.count("\\") == 1 for label in labels.values())
+    edges = {(e.get_source(), e.get_destination()) for e in graph.get_edges()}
+    assert ("a3", "a6") in edges and ("a6", "g0") in edges
 
 
 def _random_linearisation_is_valid(graph, domain, state, rng) -> list[str]:  # type: ignore[no-untyped-def]

@@ -4,6 +4,7 @@ performers, virtual clock, a replan) drawn live and from its recording."""
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -106,7 +107,11 @@ def test_report_files_of_a_replanned_run(demo: MissionReport, tmp_path: Path) ->
 def test_plan_graph_with_graphviz(demo: MissionReport, tmp_path: Path) -> None:
     text = next(iter(_run_report(demo).dots.values()))
     assert render_dot(text, tmp_path / "g.svg") == "graphviz"
-    assert any("(move robot1" in t for t in _svg_texts(tmp_path / "g.svg"))
+    texts = _svg_texts(tmp_path / "g.svg")
+    assert any("(move robot1" in t for t in texts)
+    # each action's label on two lines: its text, then its times and state
+    assert any(re.fullmatch(r"\[\d+\.\d{3}, \d+\.\d{3}\] succeeded", t) for t in texts)
+    assert not any("\\" in t for t in texts)
 
 
 def test_report_of_a_recording_matches_the_live_one(
