@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from plansys_bridge.knowledge.domain_expert import DomainExpert
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.terminal import HELP, Terminal
@@ -66,3 +68,24 @@ def test_completion_of_commands_names_and_objects() -> None:
     assert candidates("get model action a", k) == ["askcharge"]
     assert candidates("check ", k) == ["actors"]
     assert candidates("quit now ", k) == []
+
+
+def test_history_is_kept_between_sessions(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    readline = pytest.importorskip("readline", reason="no readline on this platform")
+    from plansys_bridge.terminal import repl
+
+    monkeypatch.setattr(repl, "HISTORY_FILE", tmp_path / "history")
+    readline.clear_history()
+    first = repl._History()
+    first.load()  # no file yet: nothing, and no error
+    readline.add_history("get problem goal")
+    readline.add_history("run num_actions 2")
+    first.save()
+    readline.clear_history()
+    repl._History().load()
+    lines = [
+        readline.get_history_item(i) for i in range(1, readline.get_current_history_length() + 1)
+    ]
+    assert lines == ["get problem goal", "run num_actions 2"]
+    assert readline.get_history_length() == repl.HISTORY_LENGTH
+    readline.clear_history()

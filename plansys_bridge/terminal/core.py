@@ -382,10 +382,11 @@ class Terminal:
             if len(words) != 2 or not words[1].isdigit():
                 raise TerminalError("usage: run num_actions N")
             count = int(words[1])
-            steps = self._solve().plan.sorted().steps
+            # the first N as ``get plan`` lists them (same start: the plan's order)
+            steps = sorted(self._solve().plan.steps, key=lambda s: s.time)
             if not 0 < count <= len(steps):
                 raise TerminalError(f"cannot execute {count} actions: the plan has {len(steps)}")
-            return runner.execute(Plan(steps[:count]), to_goal=False)
+            return runner.execute(Plan(tuple(steps[:count])), to_goal=False)
         if kind == "plan-file":
             if len(words) < 2:
                 raise TerminalError("usage: run plan-file FILE")

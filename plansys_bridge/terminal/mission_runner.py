@@ -8,10 +8,9 @@ knowledge). Progress is shown as ``plansys-bridge run`` shows it: a live table
 
 ``check actors`` opens the hub the same way and lists every performer whose
 heartbeat it hears, as PlanSys2's terminal does: the mission's own and, on a DDS
-hub, those of any other process on the domain. It listens for two seconds of
-mission time (no wall time on the virtual clock) and, over DDS, for at least two
-real seconds too, since discovery and the other processes' heartbeats run on
-real time.
+hub, those of any other process on the domain. It listens for two seconds of the
+time heartbeats are sent on: real seconds on the wall clock (whatever its time
+scale), no wall time at all on the virtual clock.
 """
 
 from __future__ import annotations
@@ -32,8 +31,8 @@ if TYPE_CHECKING:
 __all__ = ["LISTEN_S", "MissionRunner"]
 
 LISTEN_S = 2.0
-"""How long ``check actors`` listens for heartbeats (mission seconds; over DDS also
-real seconds)."""
+"""How long ``check actors`` listens for heartbeats (loop seconds: real ones on the
+wall clock, mission ones on the virtual clock)."""
 
 
 class MissionRunner:
@@ -90,15 +89,11 @@ class MissionRunner:
         return "\n".join(lines)
 
     def actors(self) -> list[Actor]:
-        dds = self.mission.transport.kind == "dds"
-
         async def listen(session: Any, watch: MissionWatch) -> list[Actor]:
-            loop = asyncio.get_running_loop()
-            started = loop.time()
-            await session.hub.clock.sleep(LISTEN_S)
-            if dds:  # loop time is real time on the wall clock DDS missions use
-                await asyncio.sleep(max(0.0, LISTEN_S - (loop.time() - started)))
-            now = loop.time()  # the watch's clock here: heartbeats run on loop time
+            # heartbeat periods are counted in loop time (real seconds on the wall
+            # clock whatever its time scale), so the listening is too
+            await asyncio.sleep(LISTEN_S)
+            now = asyncio.get_running_loop().time()
             return [_actor(p, now) for p in watch.performers.values()]
 
         found: list[Actor] = self._in_session(listen, progress=False)
