@@ -40,6 +40,12 @@ def build_parser() -> argparse.ArgumentParser:
         description="Plan and execute robot missions the PlanSys2 way.",
     )
     parser.add_argument("--version", action="version", version=f"plansys-bridge {__version__}")
+    # also before the command (``plansys-bridge -v run M.yaml``); merged in main()
+    top = parser.add_mutually_exclusive_group()
+    top.add_argument(
+        "-v", "--verbose", dest="top_verbose", action="count", default=0, help=argparse.SUPPRESS
+    )
+    top.add_argument("-q", "--quiet", dest="top_quiet", action="store_true", help=argparse.SUPPRESS)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in SUBCOMMANDS:
         module = importlib.import_module(f"plansys_bridge.cli.{name.replace('-', '_')}_cmd")
@@ -52,6 +58,10 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.verbose = max(int(getattr(args, "verbose", 0) or 0), args.top_verbose)
+    args.quiet = bool(getattr(args, "quiet", False) or args.top_quiet)
+    if args.verbose and args.quiet:
+        parser.error("-v/--verbose and -q/--quiet exclude each other")
     configure_logging(args)
     with sigterm_interrupts() as termination:
         try:

@@ -57,3 +57,20 @@ def test_log_levels_and_timestamps(
     finally:
         root.handlers[:] = saved[1]
         root.setLevel(saved[0])
+
+
+@pytest.mark.parametrize(("flag", "level"), [("-vv", logging.DEBUG), ("-q", logging.ERROR)])
+def test_verbosity_may_come_before_the_command(
+    flag: str, level: int, capsys: pytest.CaptureFixture[str]
+) -> None:
+    root = logging.getLogger()
+    saved = (root.level, list(root.handlers))
+    try:
+        assert main([flag, "plan", "missing-domain.pddl"]) == 2  # an error, but logging is set
+        assert root.level == level
+        assert "error: " in capsys.readouterr().err
+    finally:
+        root.handlers[:] = saved[1]
+        root.setLevel(saved[0])
+    with pytest.raises(SystemExit):
+        main(["-v", "plan", "-q", "d.pddl"])
