@@ -27,7 +27,6 @@ from typing import Any
 from plansys_bridge.clock import WallClock
 from plansys_bridge.execution.behaviours import PlanContext
 from plansys_bridge.execution.options import ExecutorOptions
-from plansys_bridge.execution.plan_graph import build_plan_graph
 from plansys_bridge.execution.tree_builder import build_tree
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.transport import InProcessTransport
@@ -35,6 +34,7 @@ from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.pddl.model import Atom, Domain
 from plansys_bridge.pddl.parser import parse_domain
 from plansys_bridge.planning.plan import Plan, PlanStep
+from plansys_bridge.planning.plan_graph import build_plan_graph
 
 DOMAIN = """
 (define (domain ring)

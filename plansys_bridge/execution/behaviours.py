@@ -22,9 +22,9 @@ import py_trees
 from py_trees.common import Status
 
 from plansys_bridge.errors import PlansysBridgeError
-from plansys_bridge.execution.orderings import GROUND, START, Point
 from plansys_bridge.execution.plan_context import ActionRuntime, EffectDelta, PlanContext
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome
+from plansys_bridge.planning.orderings import GROUND, START, Point
 
 __all__ = [
     "ActionBehaviour",

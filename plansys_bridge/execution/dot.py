@@ -17,9 +17,9 @@ from typing import Any
 
 import pydot
 
-from plansys_bridge.execution.plan_graph import PlanGraph
 from plansys_bridge.hub.messages import ActionStatus
 from plansys_bridge.pddl.model import Atom
+from plansys_bridge.planning.plan_graph import PlanGraph
 
 __all__ = ["STATUS_COLOURS", "IncrementalDot", "plan_graph_to_dot"]
 

@@ -51,7 +51,6 @@ from plansys_bridge.errors import ExecutionError, PlansysBridgeError
 from plansys_bridge.execution.behaviours import PlanContext
 from plansys_bridge.execution.dot import IncrementalDot
 from plansys_bridge.execution.options import ExecutorOptions
-from plansys_bridge.execution.plan_graph import PlanGraph, build_plan_graph
 from plansys_bridge.execution.results import ExecutionResult
 from plansys_bridge.execution.tree_builder import build_tree
 from plansys_bridge.hub.hub import Hub
@@ -59,6 +58,7 @@ from plansys_bridge.hub.messages import ActionExecutionInfo, DotGraph, Executing
 from plansys_bridge.knowledge.evaluation import Evaluator
 from plansys_bridge.pddl.model import Atom, Condition, Domain
 from plansys_bridge.planning.plan import Plan
+from plansys_bridge.planning.plan_graph import PlanGraph, build_plan_graph
 
 if TYPE_CHECKING:
     from plansys_bridge.knowledge.problem_expert import ProblemExpert

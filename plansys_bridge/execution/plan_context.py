@@ -19,9 +19,6 @@ from typing import TYPE_CHECKING, Any
 
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.execution.options import ExecutorOptions
-from plansys_bridge.execution.orderings import END, GROUND, START, Point
-from plansys_bridge.execution.plan_graph import PlanGraph
-from plansys_bridge.execution.requirement_text import describe_unmet
 from plansys_bridge.execution.results import ActionRecord
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome
 from plansys_bridge.hub.hub import Hub
@@ -29,7 +26,10 @@ from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, Topic
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import Atom, Condition, Effect, FluentRef, FluentValue
+from plansys_bridge.planning.orderings import END, GROUND, START, Point
 from plansys_bridge.planning.plan import PlanStep
+from plansys_bridge.planning.plan_graph import PlanGraph
+from plansys_bridge.planning.requirement_text import describe_unmet
 
 if TYPE_CHECKING:
     from plansys_bridge.knowledge.problem_expert import ProblemExpert

@@ -35,9 +35,9 @@ from plansys_bridge.execution.behaviours import (
     WaitAtStartReq,
     WaitForPredecessors,
 )
-from plansys_bridge.execution.orderings import END, START
 from plansys_bridge.execution.plan_context import ActionRuntime, PlanContext
 from plansys_bridge.knowledge.evaluation import GroundAction
+from plansys_bridge.planning.orderings import END, START
 
 __all__ = ["ActionNodes", "PlanRoot", "TemplateError", "build_tree", "default_template"]
 

@@ -3,7 +3,7 @@
 Solvers often serialise more than needed (one robot waits for another that touches
 nothing it uses), and the executor's parallelism follows the plan's times. The plan
 is turned into the same partial order the executor uses
-(:func:`~plansys_bridge.execution.plan_graph.build_plan_graph`: causal links,
+(:func:`~plansys_bridge.planning.plan_graph.build_plan_graph`: causal links,
 threats and conflicting effects, between happenings), then each happening is
 placed at the earliest time its orderings allow, ``epsilon`` after the happening it
 waits for, with every action keeping its duration. The result is validated; if it
@@ -15,10 +15,10 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from plansys_bridge.errors import PlansysBridgeError
-from plansys_bridge.execution.plan_graph import END, Ordering, build_plan_graph
 from plansys_bridge.knowledge.state import State
 from plansys_bridge.pddl.model import Domain, Problem
 from plansys_bridge.planning.plan import Plan
+from plansys_bridge.planning.plan_graph import END, Ordering, build_plan_graph
 from plansys_bridge.planning.validation import (
     DEFAULT_EPSILON,
     ValidationReport,

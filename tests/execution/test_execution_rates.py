@@ -14,13 +14,13 @@ from plansys_bridge.errors import ConfigError
 from plansys_bridge.execution.dot import IncrementalDot, plan_graph_to_dot
 from plansys_bridge.execution.executor import Executor
 from plansys_bridge.execution.options import ExecutorOptions
-from plansys_bridge.execution.plan_graph import build_plan_graph
 from plansys_bridge.execution.results import ExecutionResult
 from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, DotGraph, Topics
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.pddl.model import Domain
 from plansys_bridge.pddl.parser import parse_domain
 from plansys_bridge.planning.plan import Plan, parse_plan
+from plansys_bridge.planning.plan_graph import build_plan_graph
 
 DOMAIN = """
 (define (domain corridor)

@@ -19,11 +19,11 @@ from execution_helpers import door_setup, knowledge_from, load_domain
 
 from plansys_bridge.errors import ExecutionError
 from plansys_bridge.execution.dot import plan_graph_to_dot
-from plansys_bridge.execution.plan_graph import PlanGraphError, build_plan_graph
 from plansys_bridge.hub.messages import ActionStatus
 from plansys_bridge.pddl.model import Atom
 from plansys_bridge.pddl.parser import parse_domain
 from plansys_bridge.planning.plan import parse_plan
+from plansys_bridge.planning.plan_graph import PlanGraphError, build_plan_graph
 
 FACTORY_PLAN = """
 0.000: (move robot3 assembly_zone wheels_zone)  [5.000]

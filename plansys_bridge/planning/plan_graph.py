@@ -34,29 +34,6 @@ from typing import TypeAlias
 import networkx as nx
 
 from plansys_bridge.errors import ExecutionError
-from plansys_bridge.execution.effect_access import (
-    expr_fluents,
-    ground_fluent,
-    numeric_class,
-    walk_effect,
-)
-from plansys_bridge.execution.happening_order import (
-    happening_order,
-    point_of,
-    transitive_reduction,
-)
-from plansys_bridge.execution.orderings import (
-    END,
-    GROUND,
-    START,
-    Kind,
-    Ordering,
-    PlanGraphError,
-    Point,
-    UnexplainedRequirement,
-    When,
-)
-from plansys_bridge.execution.requirement_text import condition_text, describe_unmet
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import (
@@ -68,7 +45,30 @@ from plansys_bridge.pddl.model import (
     NumericEffect,
     WhenEffect,
 )
+from plansys_bridge.planning.effect_access import (
+    expr_fluents,
+    ground_fluent,
+    numeric_class,
+    walk_effect,
+)
+from plansys_bridge.planning.happening_order import (
+    happening_order,
+    point_of,
+    transitive_reduction,
+)
+from plansys_bridge.planning.orderings import (
+    END,
+    GROUND,
+    START,
+    Kind,
+    Ordering,
+    PlanGraphError,
+    Point,
+    UnexplainedRequirement,
+    When,
+)
 from plansys_bridge.planning.plan import Plan, PlanStep
+from plansys_bridge.planning.requirement_text import condition_text, describe_unmet
 
 __all__ = [
     "END",

@@ -3,7 +3,7 @@
 An ordering says which happening (an action's start or end) must take place before
 which other one, and why; a requirement nothing explains is kept as a value, so
 checking a plan can name every problem at once. These are the words the builder
-(:mod:`plansys_bridge.execution.plan_graph`), the behaviours and the scheduler share.
+(:mod:`plansys_bridge.planning.plan_graph`), the behaviours and the scheduler share.
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
-from plansys_bridge.execution.orderings import END, START, Point
+from plansys_bridge.planning.orderings import END, START, Point
 from plansys_bridge.planning.plan import PlanStep
 
 __all__ = ["happening_order", "point_of", "transitive_reduction"]

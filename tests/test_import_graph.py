@@ -1,0 +1,98 @@
+"""The package's import graph: layers only import downwards, and no module imports
+itself back through others.
+
+Every import counts, also those under ``TYPE_CHECKING`` and inside functions: a
+cycle there is still two modules that cannot be read apart. Package ``__init__``
+modules that only re-export their submodules lazily are left out (importing a
+submodule runs its package's ``__init__`` first, which is not a dependency).
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import networkx as nx
+
+PACKAGE = Path(__file__).resolve().parents[1] / "plansys_bridge"
+
+LAYERS = (
+    "errors",
+    "clock",
+    "hub",
+    "pddl",
+    "knowledge",
+    "planning",
+    "performers",
+    "execution",
+    "mission",
+    "cli",
+)
+"""Lowest first; ``mission_config`` belongs to the mission layer."""
+
+KNOWN_CYCLES = {
+    frozenset({"plansys_bridge.bridge.config", "plansys_bridge.mission_config"}),
+    frozenset({"plansys_bridge.ros1.node", "plansys_bridge.ros1.slave"}),
+    frozenset({"plansys_bridge.ros1.node", "plansys_bridge.ros1.topics"}),
+    frozenset({"plansys_bridge.knowledge.evaluation", "plansys_bridge.knowledge.plan_atoms"}),
+}
+"""Cycles older than this test, to be taken apart; no new one may join them."""
+
+
+def _modules() -> dict[str, Path]:
+    found = {}
+    for path in PACKAGE.rglob("*.py"):
+        parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+        name = ".".join(parts).removesuffix(".__init__")
+        found[name] = path
+    return found
+
+
+def _imports(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
+    out: set[str] = set()
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        targets: list[str] = []
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join([*anchor, base] if base else anchor)
+            targets = [base, *(f"{base}.{alias.name}" for alias in node.names)]
+        for target in targets:
+            if target in modules and target != name and not name.startswith(target + "."):
+                out.add(target)
+    return out
+
+
+def _graph() -> nx.DiGraph:
+    modules = _modules()
+    graph = nx.DiGraph()
+    for name, path in modules.items():
+        graph.add_node(name)
+        for target in _imports(name, path, modules):
+            if modules[target].name != "__init__.py":
+                graph.add_edge(name, target)
+    return graph
+
+
+def _layer(module: str) -> int | None:
+    top = module.split(".")[1] if "." in module else ""
+    top = "mission" if top == "mission_config" else top
+    return LAYERS.index(top) if top in LAYERS else None
+
+
+def test_no_new_import_cycle() -> None:
+    cycles = {frozenset(c) for c in nx.simple_cycles(_graph())}
+    assert cycles <= KNOWN_CYCLES, sorted(sorted(c) for c in cycles - KNOWN_CYCLES)
+
+
+def test_layers_import_only_downwards() -> None:
+    upward = []
+    for source, target in _graph().edges:
+        low, high = _layer(source), _layer(target)
+        if low is not None and high is not None and high > low:
+            upward.append(f"{source} ({LAYERS[low]}) imports {target} ({LAYERS[high]})")
+    assert upward == []
