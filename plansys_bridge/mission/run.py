@@ -139,8 +139,10 @@ async def _run(
         return clock.now() - t0
 
     say = out or (lambda _s: None)
+    view = make_live_view(elapsed, mission.name) if live and out is not None else None
+    watch = MissionWatch(clock.now, view if view is not None else ProgressLines(say, elapsed))
     async with MissionSession(
-        mission, domain, knowledge, clock, out=say, local_performers=local_performers
+        mission, domain, knowledge, clock, out=say, local_performers=local_performers, watch=watch
     ) as session:
         performers = (
             f"{len(session.performers)} performers"
@@ -180,9 +182,6 @@ async def _run(
                 session.events_applied,
             )
         executor = Executor(session.hub, domain, knowledge, planner, mission.executor_options())
-        view = make_live_view(elapsed, mission.name) if live and out is not None else None
-        listener = view if view is not None else ProgressLines(say, elapsed)
-        watch = MissionWatch(clock.now, listener).attach(session.hub)
         plan_id = f"{mission.name}-{secrets.token_hex(4)}"
         session.plan_ids.add(plan_id)  # DDS: messages naming another plan are dropped
         execute = executor.execute(plan, goal=knowledge.get_goal(), plan_id=plan_id)

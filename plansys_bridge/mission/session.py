@@ -21,6 +21,7 @@ from plansys_bridge.mission.file_keys import in_mission_file
 from plansys_bridge.mission.knowledge import apply_event
 from plansys_bridge.mission.transport import make_transport
 from plansys_bridge.mission_config import EventConfig, MissionConfig
+from plansys_bridge.monitoring.watch import MissionWatch
 from plansys_bridge.pddl.model import Domain
 from plansys_bridge.performers.base import ActionPerformer, PerformerContext
 from plansys_bridge.performers.registry import performers_from_config, start_performers
@@ -50,6 +51,7 @@ class MissionSession:
         performer_overrides: dict[str, Any] | None = None,
         local_performers: bool = True,
         await_performers: bool = True,
+        watch: MissionWatch | None = None,
     ) -> None:
         self.mission = mission
         self.domain = domain
@@ -61,6 +63,9 @@ class MissionSession:
         """False: the performers run in other processes (DDS); wait for their heartbeats
         (unless ``await_performers`` is False: ``check actors`` lists whoever is alive)."""
         self.await_performers = await_performers
+        self.watch = watch
+        """Attached to the hub before the performers start, so it sees them all (the
+        caller closes it)."""
         self.out = out
         self.performers: list[ActionPerformer] = []
         self.recorder: Any = None
@@ -72,6 +77,8 @@ class MissionSession:
 
     async def __aenter__(self) -> MissionSession:
         await self.hub.start()
+        if self.watch is not None:
+            self.watch.attach(self.hub)
         try:
             if self.mission.record:
                 from plansys_bridge.monitoring.recorder import MissionRecorder

@@ -116,6 +116,10 @@ class MissionRunner:
         listener, view = self._progress(elapsed) if progress else (None, None)
 
         async def go() -> Any:
+            # progress is stamped in mission time; heartbeats (``check actors``) in
+            # loop time, the time their period is counted in
+            stamps = clock.now if progress else asyncio.get_running_loop().time
+            watch = MissionWatch(stamps, listener)
             async with MissionSession(
                 self.mission,
                 self.knowledge.domain,
@@ -123,11 +127,8 @@ class MissionRunner:
                 clock,
                 local_performers=self.local_performers,
                 await_performers=progress,
+                watch=watch,
             ) as session:
-                # progress is stamped in mission time; heartbeats (``check actors``)
-                # in loop time, the time their period is counted in
-                stamps = clock.now if progress else asyncio.get_running_loop().time
-                watch = MissionWatch(stamps, listener).attach(session.hub)
                 if view is not None:
                     view.bind(watch)
                 with view if view is not None else contextlib.nullcontext():
