@@ -76,13 +76,8 @@ def _unquote(value: Any) -> str:
 
 
 def _read(dot_text: str) -> _Graph:
-    try:
-        import pydot
-    except ImportError as exc:  # pragma: no cover - pydot comes with the report extra
-        raise DotGraphError(
-            f"drawing a plan graph without Graphviz needs pydot (pip install "
-            f"'plansys-bridge[report]'): {exc}"
-        ) from exc
+    import pydot  # a dependency of the package (the executor writes DOT with it)
+
     parsed = pydot.graph_from_dot_data(dot_text)
     if not parsed:
         raise DotGraphError("not a DOT graph")
