@@ -69,10 +69,9 @@ from cyclonedds.util import duration
 from plansys_bridge.clock import VirtualTimeEventLoop
 from plansys_bridge.errors import HubError
 from plansys_bridge.hub.dds_checks import SampleCheck, check_sample
-from plansys_bridge.hub.dds_codec import ROUTES, Channel, Route, decode, encode
+from plansys_bridge.hub.dds_codec import ROUTES, Channel, Route, wire_sources
 from plansys_bridge.hub.dds_config import check_domain_id, loopback_config
 from plansys_bridge.hub.dds_discovery import publish_discovery_info
-from plansys_bridge.hub.dds_wire import WireCodec, wire_codec
 from plansys_bridge.hub.messages import Topics
 from plansys_bridge.hub.transport import InProcessTransport, Subscription
 
@@ -135,7 +134,7 @@ class _SharedDomain:
 
 def _write(endpoint: _Endpoint, sample: Any) -> None:
     """Write ``sample`` as XCDR1 bytes (what ``DataWriter.write`` does, faster)."""
-    ret = ddspy_write(endpoint.writer._ref, endpoint.codec.encode(sample))
+    ret = ddspy_write(endpoint.writer._ref, endpoint.channel.write(sample))
     if ret < 0:
         raise DDSException(ret, f"writing on {endpoint.channel.dds_topic}")
 
@@ -164,7 +163,6 @@ class _Endpoint:
     writer: Any
     reader: Any
     condition: Any
-    codec: WireCodec
 
 
 def _qos(channel: Channel, *, reader: bool = False, marked: bool = False) -> Qos:
@@ -295,8 +293,7 @@ class DdsTransport:
         reader = DataReader(p, topic, _qos(channel, reader=True))
         condition = ReadCondition(reader, _ANY_SAMPLE)
         self._waitset.attach(condition)
-        codec = wire_codec(channel.ros_type)
-        return _Endpoint(route, channel, topic, writer, reader, condition, codec)
+        return _Endpoint(route, channel, topic, writer, reader, condition)
 
     async def close(self) -> None:
         self._closed = True
@@ -348,7 +345,7 @@ class DdsTransport:
         if route is None:
             self._publish_local(topic, msg)
             return
-        plain, wrapped = encode(topic, msg)
+        plain, wrapped = wire_sources(topic, msg)
         plain_ep, project_ep = self._writers[topic]
         try:
             if wrapped is not None and project_ep is not None:
@@ -466,7 +463,7 @@ class DdsTransport:
                 if skip_marked and self._from_project(ep, info.publication_handle):
                     continue
                 try:
-                    msg = decode(ep.channel, ep.codec.decode(data))
+                    msg = ep.channel.read(data)
                     reason = self._check(ep.route.hub_topic, msg)
                 except Exception as exc:  # a foreign writer's malformed sample
                     reason = str(exc)

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 from cyclonedds.idl import IdlStruct
@@ -42,6 +43,7 @@ from plansys_bridge.hub.dds_convert import (
     to_idl_time,
 )
 from plansys_bridge.hub.dds_qos import TOPIC_QOS, TopicQos
+from plansys_bridge.hub.dds_wire import hub_reader, wire_codec
 from plansys_bridge.interfaces.dds import dds_type
 
 __all__ = [
@@ -55,6 +57,7 @@ __all__ = [
     "from_idl_seconds",
     "to_idl_duration",
     "to_idl_time",
+    "wire_sources",
 ]
 
 ROS_PREFIX = "rt/"
@@ -114,6 +117,55 @@ def _plain(ros_type: str) -> Callable[[Any], tuple[IdlStruct, IdlStruct | None]]
     return lambda m: (encoder(m), None)
 
 
+# -- straight to and from bytes (hub/dds_wire.py): what the transport uses ------------------
+
+
+@dataclass(frozen=True)
+class _Text:
+    """A ``std_msgs/String`` as the hub sees it."""
+
+    data: str
+
+
+def _merge_bridge(x: hm.BridgeActionExecution) -> hm.ActionExecution:
+    """The wrapped message with the wrapper's fields (as ``dataclasses.replace`` would,
+    filled in at once like every decoded message: see :mod:`~plansys_bridge.hub.dds_wire`)."""
+    merged: hm.ActionExecution = object.__new__(hm.ActionExecution)
+    vars(merged).update(
+        vars(x.execution), request_id=x.request_id, bid=x.bid if x.has_bid else None
+    )
+    return merged
+
+
+_HUB_FORMS: dict[str, tuple[type, Callable[[Any], Any] | None]] = {
+    ACTION_EXECUTION: (hm.ActionExecution, None),
+    BRIDGE_ACTION_EXECUTION: (hm.BridgeActionExecution, _merge_bridge),
+    ACTION_PERFORMER_STATUS: (hm.ActionPerformerStatus, None),
+    ACTION_EXECUTION_INFO: (hm.ActionExecutionInfo, None),
+    PLAN: (hm.Plan, lambda plan: hm.ExecutingPlan(plan=plan)),
+    BRIDGE_EXECUTING_PLAN: (hm.ExecutingPlan, None),
+    KNOWLEDGE: (hm.Knowledge, None),
+    BRIDGE_SIGNED: (SignedMessage, None),
+    STRING: (_Text, lambda text: hm.DotGraph(text=text.data)),
+}
+"""Per DDS type: the hub dataclass its bytes are read into, and what then makes the
+hub message of it (the same results as the ``decode`` functions of the routes)."""
+
+
+def _executing_plan_sources(m: hm.ExecutingPlan | hm.Plan) -> tuple[Any, Any]:
+    executing = m if isinstance(m, hm.ExecutingPlan) else hm.ExecutingPlan(plan=m)
+    return executing.plan, executing
+
+
+_SOURCES: dict[str, Callable[[Any], tuple[Any, Any | None]]] = {
+    hm.Topics.ACTIONS_HUB: lambda m: (m, hm.BridgeActionExecution.of(m)),
+    hm.Topics.EXECUTING_PLAN: _executing_plan_sources,
+    hm.Topics.DOT_GRAPH: lambda m: (_Text(m.text), None),
+}
+"""Per hub topic, what the plain and the wrapper sample are written from (objects
+with the DDS types' field names); by default the message itself, unwrapped."""
+
+
 # -- routing -----------------------------------------------------------------------------
 
 
@@ -131,6 +183,28 @@ class Channel:
     @property
     def idl_type(self) -> type[IdlStruct]:
         return dds_type(self.ros_type)
+
+    @cached_property
+    def read(self) -> Callable[[bytes], object]:
+        """The sample's bytes (with their encapsulation header) -> the hub message."""
+        hub, finish = _HUB_FORMS[self.ros_type]
+        fast = hub_reader(self.ros_type, hub, self.decode)
+        if finish is None:
+            return fast
+        decoded = self.decode
+        cls = self.idl_type
+
+        def read(data: bytes) -> object:
+            if data[:2] != b"\x00\x01":
+                return decoded(cls.deserialize(data))
+            return finish(fast(data))
+
+        return read
+
+    @cached_property
+    def write(self) -> Callable[[Any], bytes]:
+        """An object with the type's field names -> the sample's XCDR1 bytes."""
+        return wire_codec(self.ros_type).encode
 
     @property
     def depth(self) -> int:
@@ -245,6 +319,17 @@ ROUTES: dict[str, Route] = {
 
 def encode(hub_topic: str, msg: object) -> tuple[IdlStruct, IdlStruct | None]:
     """The plain sample (and the project wrapper, if the topic has one) for ``msg``."""
+    return _accepting(hub_topic, msg).encode(msg)
+
+
+def wire_sources(hub_topic: str, msg: object) -> tuple[Any, Any | None]:
+    """What :attr:`Channel.write` turns into the plain and the wrapper sample of ``msg``."""
+    _accepting(hub_topic, msg)
+    split = _SOURCES.get(hub_topic)
+    return split(msg) if split is not None else (msg, None)
+
+
+def _accepting(hub_topic: str, msg: object) -> Route:
     route = ROUTES.get(hub_topic)
     if route is None:
         raise HubError(f"topic {hub_topic!r} has no DDS type (known: {', '.join(ROUTES)})")
@@ -253,7 +338,7 @@ def encode(hub_topic: str, msg: object) -> tuple[IdlStruct, IdlStruct | None]:
         raise HubError(
             f"cannot publish {type(msg).__name__} on {hub_topic!r} over DDS: expected {wanted}"
         )
-    return route.encode(msg)
+    return route
 
 
 def decode(channel: Channel, sample: Any) -> object:

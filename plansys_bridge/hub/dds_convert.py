@@ -29,6 +29,7 @@ __all__ = [
     "from_idl_seconds",
     "hub_decoder",
     "hub_encoder",
+    "split_seconds",
     "to_idl_duration",
     "to_idl_time",
 ]
@@ -39,7 +40,7 @@ _INT32 = (-(2**31), 2**31 - 1)
 _FLOATS = {"float32", "float64"}
 
 
-def _split_seconds(seconds: float, what: str) -> tuple[int, int]:
+def split_seconds(seconds: float, what: str) -> tuple[int, int]:
     if not math.isfinite(seconds):
         raise HubError(f"{what} {seconds!r} is not a finite number of seconds")
     sec = math.floor(seconds)
@@ -52,12 +53,12 @@ def _split_seconds(seconds: float, what: str) -> tuple[int, int]:
 
 
 def to_idl_time(seconds: float) -> Any:
-    sec, nanosec = _split_seconds(seconds, "stamp")
+    sec, nanosec = split_seconds(seconds, "stamp")
     return dds_type(TIME)(sec=sec, nanosec=nanosec)
 
 
 def to_idl_duration(seconds: float) -> Any:
-    sec, nanosec = _split_seconds(seconds, "duration")
+    sec, nanosec = split_seconds(seconds, "duration")
     return dds_type(DURATION)(sec=sec, nanosec=nanosec)
 
 
@@ -68,7 +69,7 @@ def from_idl_seconds(value: Any) -> float:
 @cache
 def hub_encoder(ros_type: str) -> Encoder:
     """hub dataclass -> the DDS sample of ``ros_type``; fields the hub lacks keep defaults."""
-    return message_encoder(ros_type, dds_type, _split_seconds)
+    return message_encoder(ros_type, dds_type, split_seconds)
 
 
 def _finite(name: str) -> Decoder:

@@ -80,7 +80,14 @@ def through_wire(topic: str, msg: object, *, project: bool = True) -> object:
     assert sample is not None
     data = sample.serialize()
     assert data[:4] == b"\x00\x01\x00\x00"  # XCDR1 (CDR_LE) header, as ROS 2 writes
-    return C.decode(channel, channel.idl_type.deserialize(data))
+    got = C.decode(channel, channel.idl_type.deserialize(data))
+    # The transport's own path, straight between hub messages and bytes, agrees.
+    sources = C.wire_sources(topic, msg)
+    source = sources[1] if channel.project else sources[0]
+    wire = channel.write(source)
+    assert wire == data.ljust((len(data) + 3) & ~3, b"\0")
+    assert channel.read(wire) == got
+    return got
 
 
 def close_seconds(a: float, b: float) -> bool:

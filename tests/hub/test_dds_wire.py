@@ -8,7 +8,7 @@ pytest.importorskip("cyclonedds", reason="cyclonedds (extra 'dds') is not instal
 
 from plansys_bridge.hub import messages as hm
 from plansys_bridge.hub.auth import SIGNED_TOPIC, SignedMessage
-from plansys_bridge.hub.dds_codec import ROUTES, encode
+from plansys_bridge.hub.dds_codec import ROUTES, encode, wire_sources
 from plansys_bridge.hub.dds_wire import wire_codec
 from plansys_bridge.interfaces.dds import dds_type
 
@@ -64,6 +64,27 @@ def test_bytes_are_cyclones_and_read_back(ros_type: str, sample: object) -> None
     theirs = theirs.ljust((len(theirs) + 3) & ~3, b"\0")  # as DataWriter.write pads
     assert codec.encode(sample) == theirs
     assert codec.decode(theirs) == sample
+
+
+@pytest.mark.parametrize(("topic", "msg"), MESSAGES)
+def test_hub_messages_go_straight_to_the_same_bytes_and_back(topic: str, msg: object) -> None:
+    route = ROUTES[topic]
+    for channel, sample, source in zip(
+        route.channels, encode(topic, msg), wire_sources(topic, msg), strict=False
+    ):
+        assert sample is not None
+        theirs = sample.serialize(use_version_2=False)  # type: ignore[attr-defined]
+        assert channel.write(source) == theirs.ljust((len(theirs) + 3) & ~3, b"\0")
+        assert channel.read(theirs) == channel.decode(sample)
+
+
+def test_unknown_constants_and_numbers_that_are_not_finite_are_refused() -> None:
+    channel = ROUTES[hm.Topics.ACTIONS_HUB].plain
+    cls = dds_type("plansys2_msgs/msg/ActionExecution")
+    with pytest.raises(ValueError, match=r"ActionExecution\.type is 42, not one of REQUEST=1"):
+        channel.read(cls(type=42).serialize(use_version_2=False))
+    with pytest.raises(ValueError, match="completion is nan, not a finite number"):
+        channel.read(cls(type=5, completion=float("nan")).serialize(use_version_2=False))
 
 
 def test_other_representations_are_read_by_cyclone() -> None:
