@@ -9,88 +9,104 @@ these questions for every step; the evaluator's ``condition_atoms``,
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from typing import Any
 
 from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.knowledge.grounding import ground_args
+from plansys_bridge.knowledge.reasoner import Reasoner
 from plansys_bridge.knowledge.state import Args, FluentKey, State
 from plansys_bridge.pddl.model import (
     AddEffect,
     And,
     AndEffect,
     Atom,
-    BinaryOp,
     Compare,
     Condition,
     DeleteEffect,
     Effect,
+    Equals,
     Exists,
     FluentRef,
     Forall,
     ForallEffect,
-    Imply,
-    Negate,
     Not,
     NumericEffect,
-    NumExpr,
     Or,
     WhenEffect,
 )
+from plansys_bridge.pddl.walkers import Visitor, children
 
-if TYPE_CHECKING:
-    from plansys_bridge.knowledge.evaluation import Evaluator
+__all__ = ["AtomWalker", "effect_atoms"]
+
+Bindings = Mapping[str, str]
+
+
+class _EffectAtoms(Visitor[None]):
+    """(adds, deletes, numeric fluent keys); see :meth:`Evaluator.effect_atoms`."""
+
+    kinds = ("effect",)
+
+    def __init__(self, reasoner: Reasoner, state: State | None) -> None:
+        self.r = reasoner
+        self.check = state is not None
+        self.ctx = reasoner._context(state if state is not None else reasoner._constants_state())
+        self.adds: set[Atom] = set()
+        self.deletes: set[Atom] = set()
+        self.fluents: set[FluentKey] = set()
+
+    def walk_and_effect(self, eff: AndEffect, b: Bindings) -> None:
+        for sub in eff.effects:
+            self.walk(sub, b)
+
+    def walk_add_effect(self, eff: AddEffect, b: Bindings) -> None:
+        self.adds.add(Atom(eff.atom.predicate, ground_args(eff.atom.args, b)))
+
+    def walk_delete_effect(self, eff: DeleteEffect, b: Bindings) -> None:
+        self.deletes.add(Atom(eff.atom.predicate, ground_args(eff.atom.args, b)))
+
+    def walk_numeric_effect(self, eff: NumericEffect, b: Bindings) -> None:
+        self.fluents.add((eff.fluent.name, ground_args(eff.fluent.args, b)))
+
+    def walk_when_effect(self, eff: WhenEffect, b: Bindings) -> None:
+        if not self.check or self.r._holds(eff.condition, b, self.ctx):
+            self.walk(eff.effect, b)
+
+    def walk_forall_effect(self, eff: ForallEffect, b: Bindings) -> None:
+        for nb in self.r._enumerate(eff.variables, b, self.ctx):
+            self.walk(eff.effect, nb)
 
 
 def effect_atoms(
-    ev: Evaluator, effect: Effect, bindings: dict[str, str], state: State | None
+    reasoner: Reasoner, effect: Effect, bindings: dict[str, str], state: State | None
 ) -> tuple[set[Atom], set[Atom], set[FluentKey]]:
     """(adds, deletes, numeric fluent keys); see :meth:`Evaluator.effect_atoms`."""
-    adds: set[Atom] = set()
-    deletes: set[Atom] = set()
-    fluents: set[FluentKey] = set()
-    ctx = ev._context(state if state is not None else ev._constants_state())
-    check = state is not None
-
-    def visit(eff: Effect, b: dict[str, str]) -> None:
-        if isinstance(eff, AndEffect):
-            for sub in eff.effects:
-                visit(sub, b)
-        elif isinstance(eff, AddEffect):
-            adds.add(Atom(eff.atom.predicate, ground_args(eff.atom.args, b)))
-        elif isinstance(eff, DeleteEffect):
-            deletes.add(Atom(eff.atom.predicate, ground_args(eff.atom.args, b)))
-        elif isinstance(eff, NumericEffect):
-            fluents.add((eff.fluent.name, ground_args(eff.fluent.args, b)))
-        elif isinstance(eff, WhenEffect):
-            if not check or ev._holds(eff.condition, b, ctx):
-                visit(eff.effect, b)
-        elif isinstance(eff, ForallEffect):
-            for nb in ev._enumerate(eff.variables, b, ctx):
-                visit(eff.effect, nb)
-
-    visit(effect, bindings)
-    return adds, deletes, fluents
+    walker = _EffectAtoms(reasoner, state)
+    walker.walk(effect, bindings)
+    return walker.adds, walker.deletes, walker.fluents
 
 
-class AtomWalker:
-    """Collects the ground atoms and fluents a condition depends on."""
+class AtomWalker(Visitor[None]):
+    """Collects the ground atoms and fluents a condition depends on
+    (``walk(cond, bindings, positive)``)."""
 
-    def __init__(self, ev: Evaluator, state: State | None) -> None:
-        self.ev = ev
+    kinds = ("condition", "expression")
+
+    def __init__(self, reasoner: Reasoner, state: State | None) -> None:
+        self.r = reasoner
         self.state = state
-        self.ctx = ev._context(state if state is not None else ev._constants_state())
+        self.ctx = reasoner._context(state if state is not None else reasoner._constants_state())
         self.positive: set[Atom] = set()
         self.negative: set[Atom] = set()
         self.fluents: set[FluentKey] = set()
         self._expanding: set[tuple[str, Args]] = set()
 
-    def _holds(self, cond: Condition, b: Mapping[str, str]) -> bool:
+    def _holds(self, cond: Condition, b: Bindings) -> bool:
         try:
-            return self.ev._holds(cond, b, self.ctx)
+            return self.r._holds(cond, b, self.ctx)
         except KnowledgeError:
             return False
 
-    def _choose(self, options: list[tuple[Condition, dict[str, str]]], positive: bool) -> None:
+    def _choose(self, options: list[tuple[Condition, Bindings]], positive: bool) -> None:
         """A disjunction: with a state, walk the first alternative that does its job."""
         if self.state is not None:
             for cond, b in options:
@@ -100,63 +116,72 @@ class AtomWalker:
         for cond, b in options:
             self.walk(cond, b, positive)
 
-    def walk(self, cond: Condition, b: dict[str, str], positive: bool) -> None:
-        if isinstance(cond, Atom):
-            args = ground_args(cond.args, b)
-            rules = self.ev._derived_rules.get(cond.predicate)
-            if rules is None:
-                (self.positive if positive else self.negative).add(Atom(cond.predicate, args))
-                return
-            key = (cond.predicate, args)
-            if key in self._expanding:
-                return
-            self._expanding.add(key)
-            options = []
-            for rule in rules:
-                rb = {p.name: a for p, a in zip(rule.head.parameters, args, strict=True)}
-                options.append((rule.condition, rb))
-            # Several rules for one head act like a disjunction of their bodies.
-            if len(options) == 1:
-                self.walk(options[0][0], options[0][1], positive)
-            elif positive:
-                self._choose(options, True)
-            else:
-                for c, rb in options:
-                    self.walk(c, rb, False)
-            self._expanding.discard(key)
-        elif isinstance(cond, And):
-            if positive:
-                for c in cond.operands:
-                    self.walk(c, b, True)
-            else:
-                self._choose([(c, b) for c in cond.operands], False)
-        elif isinstance(cond, Or):
-            if positive:
-                self._choose([(c, b) for c in cond.operands], True)
-            else:
-                for c in cond.operands:
-                    self.walk(c, b, False)
-        elif isinstance(cond, Not):
-            self.walk(cond.operand, b, not positive)
-        elif isinstance(cond, Imply):
-            self.walk(Or((Not(cond.antecedent), cond.consequent)), b, positive)
-        elif isinstance(cond, (Exists, Forall)):
-            groundings = [(cond.body, nb) for nb in self.ev._enumerate(cond.variables, b, self.ctx)]
-            disjunctive = isinstance(cond, Exists) == positive
-            if disjunctive:
-                self._choose(groundings, positive)
-            else:
-                for body, nb in groundings:
-                    self.walk(body, nb, positive)
-        elif isinstance(cond, Compare):
-            self._expr(cond.left, b)
-            self._expr(cond.right, b)
+    def walk_atom(self, cond: Atom, b: Bindings, positive: bool) -> None:
+        args = ground_args(cond.args, b)
+        rules = self.r._derived_rules.get(cond.predicate)
+        if rules is None:
+            (self.positive if positive else self.negative).add(Atom(cond.predicate, args))
+            return
+        key = (cond.predicate, args)
+        if key in self._expanding:
+            return
+        self._expanding.add(key)
+        options: list[tuple[Condition, Bindings]] = []
+        for rule in rules:
+            rb = {p.name: a for p, a in zip(rule.head.parameters, args, strict=True)}
+            options.append((rule.condition, rb))
+        # Several rules for one head act like a disjunction of their bodies.
+        if len(options) == 1:
+            self.walk(options[0][0], options[0][1], positive)
+        elif positive:
+            self._choose(options, True)
+        else:
+            for c, option_b in options:
+                self.walk(c, option_b, False)
+        self._expanding.discard(key)
 
-    def _expr(self, expr: NumExpr, b: Mapping[str, str]) -> None:
-        if isinstance(expr, FluentRef):
-            self.fluents.add((expr.name, ground_args(expr.args, b)))
-        elif isinstance(expr, BinaryOp):
-            self._expr(expr.left, b)
-            self._expr(expr.right, b)
-        elif isinstance(expr, Negate):
-            self._expr(expr.operand, b)
+    def walk_and(self, cond: And, b: Bindings, positive: bool) -> None:
+        if positive:
+            for c in cond.operands:
+                self.walk(c, b, True)
+        else:
+            self._choose([(c, b) for c in cond.operands], False)
+
+    def walk_or(self, cond: Or, b: Bindings, positive: bool) -> None:
+        if positive:
+            self._choose([(c, b) for c in cond.operands], True)
+        else:
+            for c in cond.operands:
+                self.walk(c, b, False)
+
+    def walk_not(self, cond: Not, b: Bindings, positive: bool) -> None:
+        self.walk(cond.operand, b, not positive)
+
+    def walk_exists(self, cond: Exists | Forall, b: Bindings, positive: bool) -> None:
+        groundings: list[tuple[Condition, Bindings]] = [
+            (cond.body, nb) for nb in self.r._enumerate(cond.variables, b, self.ctx)
+        ]
+        if (type(cond) is Exists) == positive:  # some grounding is enough
+            self._choose(groundings, positive)
+        else:
+            for body, nb in groundings:
+                self.walk(body, nb, positive)
+
+    walk_forall = walk_exists
+
+    def walk_equals(self, cond: Equals, b: Bindings, positive: bool) -> None:
+        return None
+
+    def walk_compare(self, cond: Compare | Any, b: Bindings, positive: bool) -> None:
+        for child in children(cond):
+            self.walk(child, b, positive)
+
+    walk_binary_op = walk_negate = walk_compare
+
+    def walk_fluent_ref(self, expr: FluentRef, b: Bindings, positive: bool) -> None:
+        self.fluents.add((expr.name, ground_args(expr.args, b)))
+
+    def walk_number(self, expr: Any, b: Bindings, positive: bool) -> None:
+        return None
+
+    walk_duration_ref = walk_number

@@ -18,8 +18,8 @@ subtype of the expected type.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Mapping
+from typing import Any
 
 from plansys_bridge.errors import PddlSemanticError, SourceLocation
 from plansys_bridge.pddl.diagnostics import nth_token_after, semantic_error
@@ -28,93 +28,30 @@ from plansys_bridge.pddl.model import (
     OBJECT_TYPE,
     Action,
     AddEffect,
-    And,
-    AndEffect,
     Atom,
-    BinaryOp,
-    Compare,
     Condition,
     DeleteEffect,
     Domain,
     DurationRef,
     DurativeAction,
     Effect,
-    Equals,
-    Exists,
     FluentRef,
     FluentValue,
-    Forall,
-    ForallEffect,
-    Imply,
-    Negate,
-    Not,
-    Number,
-    NumericEffect,
     NumExpr,
-    Or,
     PredicateDef,
     Problem,
     TypedName,
-    WhenEffect,
     is_variable,
 )
-from plansys_bridge.pddl.types import TypeHierarchy
-
-KNOWN_REQUIREMENTS = frozenset(
-    {
-        ":strips",
-        ":typing",
-        ":negative-preconditions",
-        ":disjunctive-preconditions",
-        ":equality",
-        ":existential-preconditions",
-        ":universal-preconditions",
-        ":quantified-preconditions",
-        ":conditional-effects",
-        ":fluents",
-        ":numeric-fluents",
-        ":object-fluents",
-        ":adl",
-        ":durative-actions",
-        ":duration-inequalities",
-        ":continuous-effects",
-        ":derived-predicates",
-        ":timed-initial-literals",
-        ":preferences",
-        ":constraints",
-        ":action-costs",
-        ":time",
-    }
+from plansys_bridge.pddl.requirements import (
+    KNOWN_REQUIREMENTS,
+    expand_requirements,
+    requirement_loc,
 )
-
-_IMPLIES = {
-    ":adl": (
-        ":strips",
-        ":typing",
-        ":negative-preconditions",
-        ":disjunctive-preconditions",
-        ":equality",
-        ":quantified-preconditions",
-        ":conditional-effects",
-    ),
-    ":quantified-preconditions": (":existential-preconditions", ":universal-preconditions"),
-    ":fluents": (":numeric-fluents", ":object-fluents"),
-    ":action-costs": (":numeric-fluents",),
-}
+from plansys_bridge.pddl.types import TypeHierarchy
+from plansys_bridge.pddl.walkers import Collector, bound_variables, children, terms
 
 Scope = Mapping[str, tuple[str, ...]]
-
-
-def expand_requirements(requirements: tuple[str, ...] | list[str]) -> frozenset[str]:
-    """The requirement set with implied requirements (``:adl`` -> ...) added."""
-    out: set[str] = set()
-    stack = list(requirements)
-    while stack:
-        req = stack.pop()
-        if req not in out:
-            out.add(req)
-            stack.extend(_IMPLIES.get(req, ()))
-    return frozenset(out)
 
 
 def arg_error(
@@ -127,28 +64,11 @@ def arg_error(
     return semantic_error(message, loc, sources)
 
 
-def _requirement_loc(
-    req: str, file: str | None, sources: Mapping[str, str]
-) -> SourceLocation | None:
-    if file is None:
-        return None
-    for name in file.split(":") if file not in sources else [file]:
-        text = sources.get(name)
-        if text is None:
-            continue
-        match = re.search(re.escape(req) + r"(?![a-z0-9_\-])", text.lower())
-        if match:
-            line = text.count("\n", 0, match.start()) + 1
-            col = match.start() - (text.rfind("\n", 0, match.start()) + 1) + 1
-            return SourceLocation(name, line, col)
-    return None
-
-
 def _fmt_types(types: tuple[str, ...]) -> str:
     return types[0] if len(types) == 1 else "(either " + " ".join(types) + ")"
 
 
-class Checker:
+class Checker(Collector):
     """Checks model nodes against one domain (and, for problems, its objects).
 
     ``objects`` maps every known object *and constant* to its types. When it is
@@ -296,61 +216,47 @@ class Checker:
         for i, param in enumerate(params):
             self.term(ref, i, param.types, scope, "function")
 
+    # A Collector: a node without a method of its own has its own terms checked,
+    # its quantified variables declared, and its children walked.
+
+    def default(self, node: Any, scope: Scope, duration_ok: bool = False) -> None:
+        if bound_variables(node):
+            scope = self.declare(node.variables, scope)
+        for term in terms(node):
+            self.plain_term(term, scope)
+        for child in children(node):
+            self.walk(child, scope, duration_ok)
+
+    def walk_atom(self, atom: Atom, scope: Scope, duration_ok: bool = False) -> None:
+        self.atom(atom, scope)
+
+    def walk_fluent_ref(self, ref: FluentRef, scope: Scope, duration_ok: bool = False) -> None:
+        self.fluent(ref, scope)
+
+    def walk_duration_ref(self, expr: DurationRef, scope: Scope, duration_ok: bool = False) -> None:
+        if not duration_ok:
+            raise self.error("?duration used outside a durative action")
+
+    def walk_add_effect(
+        self, eff: AddEffect | DeleteEffect, scope: Scope, duration_ok: bool = False
+    ) -> None:
+        if eff.atom.predicate in self.derived_names:
+            raise self.error(
+                f"derived predicate '{eff.atom.predicate}' cannot be changed by an effect",
+                eff.atom.loc,
+            )
+        self.atom(eff.atom, scope)
+
+    walk_delete_effect = walk_add_effect
+
     def num(self, expr: NumExpr, scope: Scope, duration_ok: bool) -> None:
-        if isinstance(expr, FluentRef):
-            self.fluent(expr, scope)
-        elif isinstance(expr, BinaryOp):
-            self.num(expr.left, scope, duration_ok)
-            self.num(expr.right, scope, duration_ok)
-        elif isinstance(expr, Negate):
-            self.num(expr.operand, scope, duration_ok)
-        elif isinstance(expr, DurationRef):
-            if not duration_ok:
-                raise self.error("?duration used outside a durative action")
-        else:
-            assert isinstance(expr, Number)
+        self.walk(expr, scope, duration_ok)
 
     def condition(self, cond: Condition, scope: Scope, duration_ok: bool = False) -> None:
-        if isinstance(cond, Atom):
-            self.atom(cond, scope)
-        elif isinstance(cond, And | Or):
-            for operand in cond.operands:
-                self.condition(operand, scope, duration_ok)
-        elif isinstance(cond, Not):
-            self.condition(cond.operand, scope, duration_ok)
-        elif isinstance(cond, Imply):
-            self.condition(cond.antecedent, scope, duration_ok)
-            self.condition(cond.consequent, scope, duration_ok)
-        elif isinstance(cond, Exists | Forall):
-            self.condition(cond.body, self.declare(cond.variables, scope), duration_ok)
-        elif isinstance(cond, Compare):
-            self.num(cond.left, scope, duration_ok)
-            self.num(cond.right, scope, duration_ok)
-        else:
-            assert isinstance(cond, Equals)
-            self.plain_term(cond.left, scope)
-            self.plain_term(cond.right, scope)
+        self.walk(cond, scope, duration_ok)
 
     def effect(self, eff: Effect, scope: Scope, duration_ok: bool = False) -> None:
-        if isinstance(eff, AddEffect | DeleteEffect):
-            if eff.atom.predicate in self.derived_names:
-                raise self.error(
-                    f"derived predicate '{eff.atom.predicate}' cannot be changed by an effect",
-                    eff.atom.loc,
-                )
-            self.atom(eff.atom, scope)
-        elif isinstance(eff, AndEffect):
-            for sub in eff.effects:
-                self.effect(sub, scope, duration_ok)
-        elif isinstance(eff, WhenEffect):
-            self.condition(eff.condition, scope, duration_ok)
-            self.effect(eff.effect, scope, duration_ok)
-        elif isinstance(eff, ForallEffect):
-            self.effect(eff.effect, self.declare(eff.variables, scope), duration_ok)
-        else:
-            assert isinstance(eff, NumericEffect)
-            self.fluent(eff.fluent, scope)
-            self.num(eff.value, scope, duration_ok)
+        self.walk(eff, scope, duration_ok)
 
     # ---------------------------------------------------------------- domain
 
@@ -360,7 +266,7 @@ class Checker:
             if req not in KNOWN_REQUIREMENTS:
                 raise self.error(
                     f"unknown requirement '{req}'",
-                    _requirement_loc(req, domain.source, self.sources),
+                    requirement_loc(req, domain.source, self.sources),
                 )
         for typedef in domain.types:
             self.check_type_names(typedef.parents, typedef.loc)
@@ -445,7 +351,7 @@ def check_problem(problem: Problem, domain: Domain | None, sources: Mapping[str,
             if req not in KNOWN_REQUIREMENTS:
                 raise semantic_error(
                     f"unknown requirement '{req}'",
-                    _requirement_loc(req, problem.source, sources),
+                    requirement_loc(req, problem.source, sources),
                     sources,
                 )
         return

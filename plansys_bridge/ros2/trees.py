@@ -31,15 +31,13 @@ from plansys_bridge.pddl.model import (
     Exists,
     FluentRef,
     FluentValue,
-    Forall,
-    Imply,
     Negate,
     Not,
     Number,
     NumericEffect,
-    NumExpr,
     Or,
 )
+from plansys_bridge.pddl.walkers import Visitor
 from plansys_bridge.pddl.writer import write_number
 
 __all__ = [
@@ -153,7 +151,7 @@ def condition_tree(cond: Condition, names: dict[str, str] | None = None) -> Any:
     """
     nodes: list[Any] = []
     if cond != And(()):
-        _add_condition(nodes, cond)
+        _TreeBuilder(nodes).walk(cond)
     return _tree(nodes, names or {})
 
 
@@ -165,7 +163,7 @@ def effect_tree(effect: Effect, names: dict[str, str] | None = None) -> Any:
     """
     nodes: list[Any] = []
     if effect != AndEffect(()):
-        _add_effect(nodes, effect)
+        _TreeBuilder(nodes).walk(effect)
     return _tree(nodes, names or {})
 
 
@@ -178,76 +176,95 @@ def _tree(nodes: list[Any], names: dict[str, str]) -> Any:
     return dds_type("plansys2_msgs/msg/Tree")(nodes=nodes)
 
 
-def _add_effect(nodes: list[Any], effect: Effect) -> int:
-    if isinstance(effect, AddEffect):
-        return _add_condition(nodes, effect.atom)
-    if isinstance(effect, DeleteEffect):
-        return _add_condition(nodes, Not(effect.atom))
-    if isinstance(effect, AndEffect):
-        node = _new(nodes, node_type=_N["AND"])
-        node.children = [_add_effect(nodes, e) for e in effect.effects]
-        return int(node.node_id)
-    if isinstance(effect, NumericEffect):
-        kind = _N[effect.op.replace("-", "_").upper()]
-        node = _new(nodes, node_type=_N["FUNCTION_MODIFIER"], modifier_type=kind)
-        node.children = [_add_expr(nodes, effect.fluent), _add_expr(nodes, effect.value)]
-        return int(node.node_id)
-    raise KnowledgeError(f"{type(effect).__name__} has no PlanSys2 Tree form")
-
-
 def _new(nodes: list[Any], **fields: Any) -> Any:
     node = _node_type()(node_id=len(nodes), **fields)
     nodes.append(node)
     return node
 
 
-def _add_condition(nodes: list[Any], cond: Condition) -> int:
-    if isinstance(cond, Atom):
-        nodes.append(atom_node(cond, len(nodes)))
-        return len(nodes) - 1
-    if isinstance(cond, And | Or):
-        node = _new(nodes, node_type=_N["AND" if isinstance(cond, And) else "OR"])
-        node.children = [_add_condition(nodes, c) for c in cond.operands]
+class _TreeBuilder(Visitor[int]):
+    """Appends a node (and its children) to ``nodes``; returns the node's index.
+
+    PlanSys2's Tree has no node for ``imply`` or ``forall``: those are written as
+    their ``lower()`` forms, ``(or (not a) b)`` and ``(not (exists (...) (not b)))``.
+    """
+
+    def __init__(self, nodes: list[Any]) -> None:
+        self.nodes = nodes
+
+    def _node(self, children: tuple[Any, ...] = (), **fields: Any) -> int:
+        node = _new(self.nodes, **fields)
+        node.children = [self.walk(c) for c in children]
         return int(node.node_id)
-    if isinstance(cond, Not):
-        node = _new(nodes, node_type=_N["NOT"])
-        node.children = [_add_condition(nodes, cond.operand)]
-        return int(node.node_id)
-    if isinstance(cond, Imply):  # PlanSys2 has no imply node: (or (not a) b)
-        return _add_condition(nodes, Or((Not(cond.antecedent), cond.consequent)))
-    if isinstance(cond, Forall):  # nor forall: (not (exists (...) (not body)))
-        return _add_condition(nodes, Not(Exists(cond.variables, Not(cond.body))))
-    if isinstance(cond, Exists):
-        node = _new(
-            nodes,
-            node_type=_N["EXISTS"],
-            parameters=[param(v.name, v.types[0]) for v in cond.variables],
+
+    # ------------------------------------------------------------ effects
+
+    def walk_add_effect(self, effect: AddEffect) -> int:
+        return self.walk(effect.atom)
+
+    def walk_delete_effect(self, effect: DeleteEffect) -> int:
+        return self.walk(Not(effect.atom))
+
+    def walk_and_effect(self, effect: AndEffect) -> int:
+        return self._node(effect.effects, node_type=_N["AND"])
+
+    def walk_numeric_effect(self, effect: NumericEffect) -> int:
+        kind = _N[effect.op.replace("-", "_").upper()]
+        return self._node(
+            (effect.fluent, effect.value), node_type=_N["FUNCTION_MODIFIER"], modifier_type=kind
         )
-        node.children = [_add_condition(nodes, cond.body)]
-        return int(node.node_id)
-    if isinstance(cond, Compare):
-        node = _new(nodes, node_type=_N["EXPRESSION"], expression_type=_N[_COMPARE[cond.op]])
-        node.children = [_add_expr(nodes, cond.left), _add_expr(nodes, cond.right)]
-        return int(node.node_id)
-    assert isinstance(cond, Equals)
-    node = _new(nodes, node_type=_N["EXPRESSION"], expression_type=_N["COMP_EQ"])
-    node.children = [
-        _new(nodes, node_type=_N["CONSTANT"], name=cond.left).node_id,
-        _new(nodes, node_type=_N["CONSTANT"], name=cond.right).node_id,
-    ]
-    return int(node.node_id)
 
+    def _no_tree(self, effect: Effect) -> int:
+        raise KnowledgeError(f"{type(effect).__name__} has no PlanSys2 Tree form")
 
-def _add_expr(nodes: list[Any], expr: NumExpr) -> int:
-    if isinstance(expr, Number):
-        return int(_new(nodes, node_type=_N["NUMBER"], value=float(expr.value)).node_id)
-    if isinstance(expr, FluentRef):
-        nodes.append(fluent_node(expr, len(nodes)))
-        return len(nodes) - 1
-    if isinstance(expr, Negate):
-        return _add_expr(nodes, BinaryOp("-", Number(0.0), expr.operand))
-    if isinstance(expr, DurationRef):
+    walk_when_effect = walk_forall_effect = _no_tree
+
+    # ------------------------------------------------------------ conditions
+
+    def walk_atom(self, cond: Atom) -> int:
+        self.nodes.append(atom_node(cond, len(self.nodes)))
+        return len(self.nodes) - 1
+
+    def walk_and(self, cond: And) -> int:
+        return self._node(cond.operands, node_type=_N["AND"])
+
+    def walk_or(self, cond: Or) -> int:
+        return self._node(cond.operands, node_type=_N["OR"])
+
+    def walk_not(self, cond: Not) -> int:
+        return self._node((cond.operand,), node_type=_N["NOT"])
+
+    def walk_exists(self, cond: Exists) -> int:
+        parameters = [param(v.name, v.types[0]) for v in cond.variables]
+        return self._node((cond.body,), node_type=_N["EXISTS"], parameters=parameters)
+
+    def walk_compare(self, cond: Compare) -> int:
+        kind = _N[_COMPARE[cond.op]]
+        return self._node((cond.left, cond.right), node_type=_N["EXPRESSION"], expression_type=kind)
+
+    def walk_equals(self, cond: Equals) -> int:
+        node = _new(self.nodes, node_type=_N["EXPRESSION"], expression_type=_N["COMP_EQ"])
+        node.children = [
+            _new(self.nodes, node_type=_N["CONSTANT"], name=cond.left).node_id,
+            _new(self.nodes, node_type=_N["CONSTANT"], name=cond.right).node_id,
+        ]
+        return int(node.node_id)
+
+    # ------------------------------------------------------------ expressions
+
+    def walk_number(self, expr: Number) -> int:
+        return int(_new(self.nodes, node_type=_N["NUMBER"], value=float(expr.value)).node_id)
+
+    def walk_fluent_ref(self, expr: FluentRef) -> int:
+        self.nodes.append(fluent_node(expr, len(self.nodes)))
+        return len(self.nodes) - 1
+
+    def walk_negate(self, expr: Negate) -> int:
+        return self.walk(BinaryOp("-", Number(0.0), expr.operand))
+
+    def walk_duration_ref(self, expr: DurationRef) -> int:
         raise KnowledgeError("?duration has no PlanSys2 Tree form (it can appear in no goal)")
-    node = _new(nodes, node_type=_N["EXPRESSION"], expression_type=_N[_ARITH[expr.op]])
-    node.children = [_add_expr(nodes, expr.left), _add_expr(nodes, expr.right)]
-    return int(node.node_id)
+
+    def walk_binary_op(self, expr: BinaryOp) -> int:
+        kind = _N[_ARITH[expr.op]]
+        return self._node((expr.left, expr.right), node_type=_N["EXPRESSION"], expression_type=kind)
