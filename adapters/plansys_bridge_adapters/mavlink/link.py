@@ -1,8 +1,9 @@
 """The MAVLink link of one vehicle: the pymavlink connection and the thread reading it.
 
-pymavlink is blocking, so :class:`MavlinkLink` runs a reader thread that hands each
-decoded message to the event loop (``call_soon_threadsafe``); the vehicle client on
-the loop never touches the socket except to send, under a lock. The link speaks
+The event loop watches the connection's file descriptor and parses each message
+as its bytes arrive (no thread, no polling); only a connection without a
+descriptor gets a reader thread that hands messages to the loop. The client on the
+loop sends under a lock (a thread may send too). The link speaks
 MAVLink 2 on its own codec (see :meth:`MavlinkLink._speak_mavlink2`).
 """
 
@@ -21,6 +22,9 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from .errors import LinkError
 
 MAV_COMP_ID_MISSIONPLANNER = 190
+DRAIN_BATCH = 64
+"""Messages parsed in one go before the loop runs other work (a busy link never
+starves the client's own timers)."""
 
 DEFAULT_TELEMETRY_HZ: Mapping[str, float] = {
     "GLOBAL_POSITION_INT": 5.0,
@@ -57,6 +61,7 @@ class MavlinkLink:
         self._reader: threading.Thread | None = None
         self._closing = threading.Event()
         self._send_lock = threading.Lock()
+        self._fd: int | None = None
 
     @property
     def is_open(self) -> bool:
@@ -106,19 +111,14 @@ class MavlinkLink:
     def start_reading(
         self, on_message: Callable[[Any], None], on_error: Callable[[str], None]
     ) -> None:
-        """Start the reader thread: ``on_message(msg)`` and ``on_error(reason)`` run on
-        the loop that opened the link."""
-        self._reader = threading.Thread(
-            target=self._read_loop,
-            args=(on_message, on_error),
-            name=f"mavlink-reader {self.url}",
-            daemon=True,
-        )
-        self._reader.start()
+        """Deliver each message to ``on_message(msg)`` and a broken link to
+        ``on_error(reason)``, both on the loop that opened the link.
 
-    def _read_loop(
-        self, on_message: Callable[[Any], None], on_error: Callable[[str], None]
-    ) -> None:
+        Where the connection has a file descriptor (TCP, UDP, serial on POSIX) the
+        loop itself watches it (``add_reader``): a message is parsed the moment its
+        bytes arrive, with no thread between the socket and the client. Elsewhere
+        a reader thread waits on pymavlink and hands messages over.
+        """
         conn = self._conn
 
         def eof() -> None:
@@ -127,6 +127,54 @@ class MavlinkLink:
 
         conn.handle_eof = eof  # pymavlink would only print and keep reading
         conn.handle_disconnect = eof
+        fd = self._descriptor()
+        if fd is not None and self._loop is not None:
+            self._fd = fd
+            self._loop.add_reader(fd, self._drain, on_message, on_error)
+            return
+        self._reader = threading.Thread(
+            target=self._read_loop,
+            args=(on_message, on_error),
+            name=f"mavlink-reader {self.url}",
+            daemon=True,
+        )
+        self._reader.start()
+
+    def _descriptor(self) -> int | None:
+        """The file descriptor the loop can watch (None: Windows serial ports)."""
+        fd = getattr(self._conn, "fd", None)
+        return fd if isinstance(fd, int) else None
+
+    def _drain(self, on_message: Callable[[Any], None], on_error: Callable[[str], None]) -> None:
+        """On the loop: parse what has arrived, at most a batch before yielding."""
+        conn = self._conn
+        for _ in range(DRAIN_BATCH):
+            if conn is None or self._closing.is_set():
+                self._stop_watching()
+                return
+            try:
+                msg = conn.recv_msg()
+            except Exception as exc:
+                self._stop_watching()
+                self._post(on_error, f"link error: {exc}")  # after a posted EOF
+                return
+            if msg is None:
+                return
+            if msg.get_type() != "BAD_DATA":
+                on_message(msg)
+        # more may sit in pymavlink's buffer (several messages in one datagram)
+        if self._loop is not None:
+            self._loop.call_soon(self._drain, on_message, on_error)
+
+    def _stop_watching(self) -> None:
+        fd, self._fd = self._fd, None
+        if fd is not None and self._loop is not None and not self._loop.is_closed():
+            self._loop.remove_reader(fd)
+
+    def _read_loop(
+        self, on_message: Callable[[Any], None], on_error: Callable[[str], None]
+    ) -> None:
+        conn = self._conn
         while not self._closing.is_set():
             try:
                 msg = conn.recv_msg()
@@ -163,6 +211,7 @@ class MavlinkLink:
     async def close(self) -> None:
         """Stop the reader thread and close the connection (idempotent)."""
         self._closing.set()
+        self._stop_watching()
         reader, self._reader = self._reader, None
         if reader is not None and self._loop is not None:
             await self._loop.run_in_executor(None, reader.join, 2.0)

@@ -15,7 +15,7 @@ from plansys_bridge_adapters.mavlink.errors import (
     LinkError,
     VehicleFault,
 )
-from plansys_bridge_adapters.mavlink.link import _device
+from plansys_bridge_adapters.mavlink.link import MavlinkLink, _device
 from plansys_bridge_adapters.mavlink.vehicle import LinkSettings, MavlinkVehicle
 from pymavlink.dialects.v20 import ardupilotmega as ml
 
@@ -116,7 +116,12 @@ def test_unanswered_command_times_out_naming_it(copter: VehicleDouble) -> None:
     ]
 
 
-def test_closed_link_ends_supervised_work(copter: VehicleDouble) -> None:
+@pytest.mark.parametrize("reader", ["loop", "thread"])
+def test_closed_link_ends_supervised_work(
+    copter: VehicleDouble, reader: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    if reader == "thread":  # a link without a file descriptor (a serial port on Windows)
+        monkeypatch.setattr(MavlinkLink, "_descriptor", lambda self: None)
     errors: list[str] = []
 
     async def body(v: MavlinkVehicle) -> None:
@@ -125,6 +130,7 @@ def test_closed_link_ends_supervised_work(copter: VehicleDouble) -> None:
         await asyncio.get_running_loop().run_in_executor(None, copter.stop)
         errors.append(await error_of(work, LinkError))
         assert not v.connected
+        assert (v._link._reader is not None) == (reader == "thread")
 
     with_vehicle(copter.url, body)
     assert errors == [f"{copter.url}: link closed by the vehicle"]
