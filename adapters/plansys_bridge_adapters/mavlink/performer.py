@@ -42,6 +42,7 @@ from plansys_bridge.performers.base import (
 from .double import VehicleDouble
 from .errors import MavlinkError, VehicleFault
 from .geo import GeoPoint, distance_3d_m, distance_m
+from .headway import Headway
 from .safety import make_safe, stop_safely
 from .settings import (
     SETTINGS_KEYS,
@@ -295,6 +296,7 @@ class MavlinkPerformer(ActionPerformer):
         deadline = loop.time() + s.timeouts.action
         last_send = -1e9
         guided = v.mode_number("GUIDED")
+        headway = Headway(s.timeouts.stall)
         while True:
             now = loop.time()
             if now - last_send >= s.resend_period:
@@ -312,6 +314,8 @@ class MavlinkPerformer(ActionPerformer):
                 not copter or abs(here.alt - target.alt) <= s.altitude_tolerance
             ):
                 return f"reached {name} ({horizontal:.1f} m off)"
+            if not headway.update(remaining, v.telemetry.position_time):
+                raise VehicleFault(v.url, headway.describe(name, remaining, v.telemetry.velocity))
             self._check_deadline(v, deadline, f"going to {name}")
             await v.wait_message(0.2)
 

@@ -58,7 +58,7 @@ _DOUBLE_KEYS = frozenset(
         "position_modes_need_ekf",
     }
 )
-_TIMEOUT_KEYS = frozenset({"connect", "heartbeat", "command", "ekf", "arm", "action"})
+_TIMEOUT_KEYS = frozenset({"connect", "heartbeat", "command", "ekf", "arm", "action", "stall"})
 
 
 @dataclass(frozen=True)
@@ -84,6 +84,8 @@ class Timeouts:
     ekf: float = 120.0
     arm: float = 30.0
     action: float = 600.0
+    stall: float = 20.0
+    """Seconds of the vehicle's own time a go-to may go without getting closer."""
 
 
 @dataclass(frozen=True)

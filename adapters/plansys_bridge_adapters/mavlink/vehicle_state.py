@@ -52,6 +52,8 @@ class Telemetry:
 
     position: GeoPoint | None = None
     """Latitude, longitude and altitude above home (GLOBAL_POSITION_INT.relative_alt)."""
+    position_time: float | None = None
+    """The vehicle's own time of :attr:`position`: seconds since it booted (time_boot_ms)."""
     alt_amsl: float | None = None
     velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
     """North, east, down in m/s."""
@@ -82,6 +84,7 @@ class Telemetry:
 
     def read_position(self, msg: Any) -> None:
         self.position = GeoPoint(msg.lat / 1e7, msg.lon / 1e7, msg.relative_alt / 1000.0)
+        self.position_time = msg.time_boot_ms / 1000.0
         self.alt_amsl = msg.alt / 1000.0
         self.velocity = (msg.vx / 100.0, msg.vy / 100.0, msg.vz / 100.0)
         self.heading = None if msg.hdg == 65535 else msg.hdg / 100.0

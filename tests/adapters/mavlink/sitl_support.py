@@ -21,12 +21,14 @@ import threading
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import yaml
 from mavlink_support import CONFIGS
-from plansys_bridge_adapters.mavlink.geo import GeoPoint
+from plansys_bridge_adapters.mavlink.geo import GeoPoint, distance_3d_m
+from plansys_bridge_adapters.mavlink.headway import Headway
 from plansys_bridge_adapters.mavlink.modes import Model, mode_name, mode_number, model_of_type
 from plansys_bridge_adapters.mavlink.sitl import DEFAULT_HOME, SitlProcess, instance_free
 from pymavlink import mavutil
@@ -52,6 +54,10 @@ class Seen:
     north_max: float = 0.0
     params: dict[str, float] = field(default_factory=dict)
     position: tuple[float, float] | None = None
+    counts: dict[str, int] = field(default_factory=dict)
+    """Messages heard, by type."""
+    track: list[tuple[float, float, GeoPoint]] = field(default_factory=list)
+    """Each GLOBAL_POSITION_INT: wall stamp, the vehicle's own time (s), position."""
 
 
 class GroundStation:
@@ -112,6 +118,7 @@ class GroundStation:
 
     def _on(self, msg: Any) -> None:
         kind, stamp, seen = msg.get_type(), time.time(), self.seen
+        seen.counts[kind] = seen.counts.get(kind, 0) + 1
         if kind == "HEARTBEAT" and msg.get_srcComponent() == 1 and msg.type not in (6, 27):
             self.model = self.model or model_of_type(msg.type)
             name = mode_name(self.model or "copter", msg.custom_mode)
@@ -122,6 +129,8 @@ class GroundStation:
                 seen.armed.append((stamp, armed))
         elif kind == "GLOBAL_POSITION_INT":
             seen.alt = msg.relative_alt / 1000
+            point = GeoPoint(msg.lat / 1e7, msg.lon / 1e7, seen.alt)
+            seen.track.append((stamp, msg.time_boot_ms / 1000, point))
             seen.max_alt = max(seen.max_alt, seen.alt)
             seen.position = (msg.lat / 1e7, msg.lon / 1e7)
             if self.home is None and msg.lat != 0:  # 0, 0 until the EKF has an origin
@@ -153,6 +162,17 @@ class GroundStation:
         with self._lock:
             return bool(self.seen.armed and self.seen.armed[-1][1])
 
+    def stalled_at(self, target: GeoPoint, window: float, since: float) -> float | None:
+        """Wall time of the first position heard after ``since`` that showed the vehicle
+        no closer to ``target`` for ``window`` seconds of its own time (None: never)."""
+        headway = Headway(window)
+        with self._lock:
+            track = [entry for entry in self.seen.track if entry[0] >= since]
+        for stamp, vehicle_time, point in track:
+            if not headway.update(distance_3d_m(point, target), vehicle_time):
+                return stamp
+        return None
+
     def text_time(self, fragment: str) -> float | None:
         """Wall time of the first STATUSTEXT containing ``fragment`` (case-insensitive)."""
         with self._lock:
@@ -162,10 +182,19 @@ class GroundStation:
         return None
 
     # --------------------------------------------------------------- talking
-    def stream(self, message: str, hz: float) -> None:
-        """Ask for ``message`` on this ground station's own link."""
+    def stream(self, message: str, hz: float, timeout: float = 10.0) -> None:
+        """Ask for ``message`` on this ground station's own link, again until it comes
+        (a request sent while SITL is still opening the port is lost)."""
         msg_id = getattr(ml, f"MAVLINK_MSG_ID_{message}")
-        self._command(ml.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, 1e6 / hz)
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            with self._lock:
+                wanted = self.seen.counts.get(message, 0) + 2
+            self._command(ml.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, 1e6 / hz)
+            with contextlib.suppress(AssertionError):
+                self.wait(partial(_heard, message, wanted), 1.0, message)
+                return
+        raise AssertionError(f"{self.url}: no {message} within {timeout:g} s of asking")
 
     def _command(self, command: int, *params: float) -> None:
         p = [float(x) for x in params] + [0.0] * (7 - len(params))
@@ -206,6 +235,10 @@ class GroundStation:
         raise AssertionError(f"{self.url}: {name} not set to {value} within {timeout:g} s")
 
 
+def _heard(message: str, count: int, seen: Seen) -> bool:
+    return seen.counts.get(message, 0) >= count
+
+
 class Sitl:
     """Starts ArduPilot SITL instances for one test and stops them (by pid) after it."""
 
@@ -221,7 +254,7 @@ class Sitl:
         instance: int | None = None,
         speedup: float = 10.0,
         home: GeoPoint = DEFAULT_HOME,
-        params: dict[str, float] | None = None,
+        params: Mapping[str, float] | None = None,
     ) -> SitlProcess:
         """A fresh instance (own working directory, wiped eeprom) listening on its port.
 

@@ -172,6 +172,16 @@ def test_warning_statustext_does_not_fail_the_action(copter: VehicleDouble) -> N
     assert flight.success, flight.status
 
 
+def test_wind_the_copter_cannot_fly_against_fails_the_action(copter: VehicleDouble) -> None:
+    # ArduPilot reports nothing: the copter stays in GUIDED and drifts back; the
+    # vehicle's own positions show it, 20 s of its time without getting closer
+    _, flight = fly_with_fault(copter, lambda d: d.wind(30, from_deg=0))
+    assert not flight.success
+    assert flight.status.startswith(f"{copter.url}: no headway to north_field: ")
+    assert "for 20 s of vehicle time" in flight.status, flight.status
+    assert copter.state()["mode"] == "BRAKE"  # the configured safe mode (default)
+
+
 def test_lost_heartbeat_fails_the_action(copter: VehicleDouble) -> None:
     # 1 s heartbeat timeout (conftest); the link stays silent for 200 simulated s = 5 s
     _, flight = fly_with_fault(copter, lambda d: d.drop_link(200 / SPEEDUP * SPEEDUP))

@@ -17,6 +17,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from plansys_bridge_adapters.mavlink.geo import offset
+from plansys_bridge_adapters.mavlink.settings import Timeouts
 from sitl_support import (
     GroundStation,
     Relay,
@@ -59,7 +61,10 @@ def survey_with_fault(
             injected = 0.0
             if inject is not None:
                 gcs.stream("GLOBAL_POSITION_INT", 10)
-                gcs.wait(lambda s: s.north_max > 15 and s.alt > 8, 120, "15 m into the leg")
+                on_leg = lambda s: s.north_max > 15 and s.alt > 8  # noqa: E731
+                gcs.wait(lambda s: on_leg(s) or proc.poll() is not None, 120, "15 m into the leg")
+                if not on_leg(gcs.seen):
+                    raise AssertionError(f"ended before the fault: {describe(finish_cli(proc))}")
                 injected = time.time()
                 inject(gcs)
             yield finish_cli(proc), gcs, injected
@@ -176,3 +181,28 @@ def test_link_dropped(sitl: Sitl, tmp_path: Path) -> None:
             assert_left_safe(gcs, ("RTL", "LAND"))
     finally:
         relay.close()
+
+
+def test_wind_stronger_than_the_copter(sitl: Sitl, tmp_path: Path) -> None:
+    # 30 m/s from the north, against the first leg: ArduCopter stays in GUIDED, leans
+    # as far as ANGLE_MAX lets it and drifts south without a word. The adapter sees it
+    # in the vehicle's own positions: no headway for timeouts.stall s of vehicle time.
+    copter = sitl.start("copter", speedup=SPEEDUP)
+
+    def gale(gcs: GroundStation) -> None:
+        gcs.set_param("SIM_WIND_DIR", 0)
+        gcs.set_param("SIM_WIND_SPD", 30)
+
+    with survey_with_fault(copter.gcs_url, copter.url, tmp_path, gale) as (report, gcs, _):
+        [(action, message, end)] = failed(report)
+        assert action == FIRST_LEG, describe(report)
+        assert message.startswith(f"{copter.url}: no headway to north_field: "), describe(report)
+        assert not report["success"], describe(report)
+        # when the positions the vehicle sent (as the second ground station heard them)
+        # first showed no headway for the stall window
+        [leg] = [r for r in report["records"] if r["action"] == FIRST_LEG]
+        north_field = offset(copter.home, 60, 10, 15)
+        shown = gcs.stalled_at(north_field, Timeouts().stall, leg["start"])
+        assert shown is not None, gcs.seen.track[-3:]
+        assert end - shown <= REPORT_WITHIN, (end - shown, describe(report))
+        assert_left_safe(gcs, ("BRAKE",))

@@ -34,12 +34,26 @@ class SimMotion(SimState):
                 self._descend(dt)
             elif name == "RTL":
                 self._rtl(dt)
+            if not self.landed:
+                self._drift(dt)
         else:
             if name == "GUIDED" and self.guided_target is not None:
                 self._drive_to(self.guided_target, dt)
             elif name == "RTL":
                 home = GeoPoint(self.p.home.lat, self.p.home.lon, 0.0)
                 self._drive_to(home, dt)
+
+    def _drift(self, dt: float) -> None:
+        """The part of the wind an airborne copter cannot lean against carries it."""
+        wn, we = self.wind_ne
+        speed = math.hypot(wn, we)
+        if speed <= self.p.wind_limit:
+            return
+        excess = (speed - self.p.wind_limit) / speed
+        self.north += wn * excess * dt
+        self.east += we * excess * dt
+        self.vn += wn * excess
+        self.ve += we * excess
 
     def _climb_to(self, alt: float, dt: float) -> None:
         rate = self.p.climb_rate if alt > self.alt else -self.p.descent_rate

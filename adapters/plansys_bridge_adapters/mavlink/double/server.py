@@ -161,6 +161,11 @@ class VehicleDouble:
         """Someone else switches the flight mode."""
         self._locked(lambda: self.sim.inject_mode_change(mode))
 
+    def wind(self, speed: float, from_deg: float = 0.0) -> None:
+        """Wind of ``speed`` m/s from ``from_deg`` degrees; stronger than ``wind_limit``,
+        it blows an airborne copter off its course (ArduPilot says nothing)."""
+        self._locked(lambda: self.sim.inject_wind(speed, from_deg))
+
     def drop_link(self, seconds: float) -> None:
         """The radio link goes silent both ways for ``seconds`` of simulated time."""
         self._locked(lambda: self.sim.inject_link_drop(seconds))

@@ -52,6 +52,11 @@ class VehicleSim(SimCommands, SimMotion):
         """Fault: someone else (an RC switch, another GCS) changes the mode."""
         self._enter_mode(mode_number(self.model, name))
 
+    def inject_wind(self, speed: float, from_deg: float) -> None:
+        """Wind of ``speed`` m/s from ``from_deg`` (SIM_WIND_SPD / SIM_WIND_DIR)."""
+        toward = math.radians(from_deg + 180.0)
+        self.wind_ne = (speed * math.cos(toward), speed * math.sin(toward))
+
     def inject_link_drop(self, seconds: float) -> None:
         """Fault: nothing is sent or heard for ``seconds`` of simulated time."""
         self.link_down_until = self.time + seconds

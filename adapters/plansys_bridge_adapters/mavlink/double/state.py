@@ -43,6 +43,9 @@ class SimParams:
     descent_rate: float = 1.5
     land_speed: float = 1.0
     rtl_alt: float = 15.0
+    wind_limit: float = 20.0
+    """Strongest wind (m/s) a copter holds its course against at its largest lean
+    angle; it drifts at the excess (SITL's quad holds 15 m/s and not 30)."""
     battery_capacity_s: float = 900.0
     """Seconds of flight/driving from 100 % to 0 % (idle drains a tenth as fast)."""
     battery_failsafe_pct: float = 0.0
@@ -92,6 +95,8 @@ class SimState:
         self._refusals: dict[int, int] = {}
         self._lost_acks: set[int] = set()
         self.link_down_until = -math.inf
+        self.wind_ne = (0.0, 0.0)
+        """Where the wind blows an airborne copter, north and east in m/s."""
         self.commands_seen: list[int] = []
 
     # ----------------------------------------------------------------- outputs
