@@ -40,10 +40,10 @@ from plansys_bridge.performers.base import (
 )
 
 from .double import VehicleDouble
-from .errors import MavlinkError, VehicleFault
+from .errors import LinkError, MavlinkError, VehicleFault
 from .geo import GeoPoint, distance_3d_m, distance_m
 from .headway import Headway
-from .safety import make_safe, stop_safely
+from .safety import make_safe, make_safe_when_heard, safe_mode_for, stop_safely
 from .settings import (
     SETTINGS_KEYS,
     Command,
@@ -56,6 +56,9 @@ from .telemetry import TelemetryPublisher
 from .vehicle import LinkSettings, MavlinkVehicle
 
 log = logging.getLogger(__name__)
+
+RECOVERY_WAIT = 600.0
+"""Seconds a performer keeps waiting, after a lost link, to make the vehicle safe."""
 
 
 class MavlinkPerformer(ActionPerformer):
@@ -94,6 +97,7 @@ class MavlinkPerformer(ActionPerformer):
         self.vehicle: MavlinkVehicle | None = None
         self.telemetry: TelemetryPublisher | None = None
         self._last_feedback = -1e9
+        self._recovery: asyncio.Task[str | None] | None = None
 
     # -------------------------------------------------------------- lifecycle
     def connects_to(self) -> str:
@@ -138,6 +142,7 @@ class MavlinkPerformer(ActionPerformer):
             self.telemetry.start()
 
     async def teardown(self) -> None:
+        await self._stop_recovery()
         if self.telemetry is not None:
             self.telemetry.stop()
             self.telemetry = None
@@ -169,6 +174,7 @@ class MavlinkPerformer(ActionPerformer):
     async def execute(self, goal: ActionGoal) -> str | None:
         cmd = self.commands[goal.action]
         self._last_feedback = -1e9
+        await self._stop_recovery()
         vehicle = await self._link()
         if vehicle.failsafe is not None and vehicle.telemetry.armed:
             raise ActionFailed(
@@ -182,18 +188,22 @@ class MavlinkPerformer(ActionPerformer):
             return str(await vehicle.supervise(run(vehicle, goal, cmd)))
         except MavlinkError as exc:
             if not (isinstance(exc, VehicleFault) and exc.took_over):
-                await make_safe(vehicle, self.settings.safe_mode)
+                mode = await make_safe(vehicle, self.settings.safe_mode)
+                if mode is None and isinstance(exc, LinkError):
+                    self._recover_when_heard(vehicle)
             raise ActionFailed(str(exc)) from exc
         finally:
             vehicle.expected_modes = frozenset()
             vehicle.expect_armed = False
 
     async def on_cancel(self, goal: ActionGoal) -> None:
-        """Hold position: copter BRAKE (LOITER if refused), rover HOLD."""
+        """The safe mode (``safe_mode``: copter BRAKE by default, LOITER if BRAKE is
+        refused, or LAND/RTL/...; rover HOLD, ...)."""
         v = self.vehicle
         if v is None or not v.connected:
             return
-        modes = ("BRAKE", "LOITER") if v.model == "copter" else ("HOLD",)
+        mode = safe_mode_for(v.model, self.settings.safe_mode)
+        modes = (mode, "LOITER") if mode == "BRAKE" else (mode,)
         if v.model == "copter" and not v.telemetry.armed:
             return  # on the ground: nothing moves
         for mode in modes:
@@ -202,6 +212,21 @@ class MavlinkPerformer(ActionPerformer):
                 return
             except MavlinkError as exc:
                 log.warning("%s: cancel could not switch to %s: %s", v.url, mode, exc)
+
+    def _recover_when_heard(self, vehicle: MavlinkVehicle) -> None:
+        """The link was lost mid-action and the vehicle could not be told anything:
+        make it safe as soon as it is heard again (until the next action or the end)."""
+        self._recovery = asyncio.get_running_loop().create_task(
+            make_safe_when_heard(vehicle, self.settings.safe_mode, RECOVERY_WAIT),
+            name=f"{self.node_name}: safe mode when the link is back",
+        )
+
+    async def _stop_recovery(self) -> None:
+        task, self._recovery = self._recovery, None
+        if task is not None and not task.done():
+            task.cancel()
+        if task is not None:
+            await asyncio.gather(task, return_exceptions=True)
 
     async def _link(self) -> MavlinkVehicle:
         v = self.vehicle

@@ -1,10 +1,13 @@
-"""Leaving a vehicle safe after a failed action and when its performer stops.
+"""Leaving a vehicle safe: after a failed or cancelled action, when the link comes
+back after it was lost, and when its performer stops (mission end, abort, Ctrl-C or
+SIGTERM of ``plansys-bridge run``).
 
-The rule: the adapter only makes safe a vehicle it still controls, that is one in
-GUIDED, the mode the adapter flies in. A vehicle that changed mode on its own (a
-failsafe: RTL, LAND, HOLD) or was taken over by a pilot or another ground station
-is left alone: ArduPilot or that person already decided, and switching modes back
-would fight them.
+The safe mode is the performer's ``safe_mode`` (copter BRAKE by default, or LAND,
+RTL, LOITER, SMART_RTL; rover HOLD, ...). The rule: the adapter only makes safe a
+vehicle it still controls, that is one in GUIDED, the mode the adapter flies in. A
+vehicle that changed mode on its own (a failsafe: RTL, LAND, HOLD) or was taken over
+by a pilot or another ground station is left alone: ArduPilot or that person
+already decided, and switching modes back would fight them.
 """
 
 from __future__ import annotations
@@ -50,6 +53,11 @@ async def make_safe(vehicle: MavlinkVehicle, configured: str | None) -> str | No
             lambda: vehicle.telemetry.last_heartbeat >= since, FRESH_HEARTBEAT, "a HEARTBEAT"
         )
     except MavlinkError:
+        log.warning(
+            "%s: no HEARTBEAT: cannot switch the vehicle to %s (its own failsafe decides)",
+            vehicle.url,
+            safe_mode_for(vehicle.model, configured),
+        )
         return None
     if not vehicle.telemetry.armed or vehicle.mode != "GUIDED":
         return None
@@ -65,6 +73,25 @@ async def make_safe(vehicle: MavlinkVehicle, configured: str | None) -> str | No
         return None
     finally:
         vehicle.expected_modes = frozenset()
+    return mode
+
+
+async def make_safe_when_heard(
+    vehicle: MavlinkVehicle, configured: str | None, within: float
+) -> str | None:
+    """After the link was lost: wait up to ``within`` seconds for the vehicle to be
+    heard again, then make it safe (if it is still in GUIDED: ArduPilot's own GCS
+    failsafe may have taken it meanwhile, and then it is left alone)."""
+    since = asyncio.get_running_loop().time()
+    try:
+        await vehicle.wait_for(
+            lambda: vehicle.telemetry.last_heartbeat > since, within, "the link to come back"
+        )
+    except MavlinkError:
+        return None
+    mode = await make_safe(vehicle, configured)
+    if mode is not None:
+        log.warning("%s: link back; vehicle switched to %s", vehicle.url, mode)
     return mode
 
 

@@ -16,6 +16,7 @@ bid, and says so once. Settings: :mod:`.settings`.
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import time
 from collections.abc import Mapping, Sequence
@@ -71,6 +72,8 @@ class Nav2Performer(ActionPerformer):
         self._client: ActionClient | None = None
         self._double: Any = None
         self._goal: ClientGoal | None = None
+        self._sending: asyncio.Future[ClientGoal] | None = None
+        """A goal request on its way: a cancel meanwhile still reaches its goal."""
         self._warned_absent = False
 
     @classmethod
@@ -190,7 +193,12 @@ class Nav2Performer(ActionPerformer):
                 self.feedback(done, f"{left:.2f} m to {name}")
 
         message = dds_type(f"{NAV_TYPE}_Goal")(pose=self._pose(location))
-        handle = await client.send_goal(message, on_feedback=on_feedback)
+        # shielded: a cancel (a halt, the end of the mission, SIGTERM) arriving while
+        # Nav2 accepts the goal leaves the request running, so on_cancel cancels the
+        # goal it started instead of leaving the robot driving
+        self._sending = asyncio.ensure_future(client.send_goal(message, on_feedback=on_feedback))
+        handle = await asyncio.shield(self._sending)
+        self._sending = None
         if not handle.accepted:
             raise ActionFailed(f"{action} rejected the goal to {name}")
         self._goal = handle  # kept when cancelled: on_cancel cancels it on Nav2
@@ -206,8 +214,16 @@ class Nav2Performer(ActionPerformer):
         )
 
     async def on_cancel(self, goal: ActionGoal) -> None:
-        handle = self._goal
-        self._goal = None
+        handle, self._goal = self._goal, None
+        sending, self._sending = self._sending, None
+        if handle is None and sending is not None:
+            try:
+                async with asyncio.timeout(5.0):
+                    handle = await sending
+            except Exception as exc:
+                log.warning("performer %s: the Nav2 goal request failed: %s", self.node_name, exc)
+            if handle is not None and not handle.accepted:
+                handle = None
         if handle is not None:
             try:
                 await handle.cancel(timeout=5.0)
