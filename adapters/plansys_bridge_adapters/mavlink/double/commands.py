@@ -13,6 +13,7 @@ from typing import Any
 
 from ..geo import GeoPoint
 from ..modes import mode_name, mode_number, mode_table
+from .ground_station import EXTRA_TELEMETRY
 from .state import ML
 from .telemetry import STREAMABLE, SimTelemetry
 
@@ -43,7 +44,7 @@ class SimCommands(SimTelemetry):
 
     def handle(self, msg: Any) -> None:
         """React to one decoded message from the ground station."""
-        if self.link_down:
+        if self.link_down or self.gcs.handle(msg):
             return
         kind = msg.get_type()
         if kind == "COMMAND_LONG":
@@ -108,7 +109,11 @@ class SimCommands(SimTelemetry):
             self._ack(command, ML.MAV_RESULT_DENIED)
 
     def _obey(self, command: int, p: tuple[float, ...]) -> None:
-        if command == ML.MAV_CMD_SET_MESSAGE_INTERVAL:
+        answered = self.gcs.command(command, p)
+        if answered is not None:
+            self._ack(command, answered)
+            self.gcs.after_ack(command, p)
+        elif command == ML.MAV_CMD_SET_MESSAGE_INTERVAL:
             self._ack(command, self._set_interval(int(p[0]), p[1]))
         elif command == ML.MAV_CMD_REQUEST_MESSAGE:
             sent = self._send_telemetry(int(p[0]))
@@ -134,7 +139,7 @@ class SimCommands(SimTelemetry):
             self._ack(command, ML.MAV_RESULT_UNSUPPORTED)
 
     def _set_interval(self, msg_id: int, interval_us: float) -> int:
-        if msg_id not in STREAMABLE:
+        if msg_id not in STREAMABLE | EXTRA_TELEMETRY:
             return ML.MAV_RESULT_FAILED
         if interval_us < 0:
             self.intervals.pop(msg_id, None)

@@ -80,6 +80,7 @@ class VehicleSim(SimCommands, SimMotion):
             self._check_battery()
             self._auto_disarm()
         self._stream()
+        self.gcs.step()
 
     def _boot(self) -> None:
         # SITL's order whatever the delays: boot ends, RC input arrives, then the EKF

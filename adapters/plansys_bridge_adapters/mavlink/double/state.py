@@ -18,6 +18,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from ..geo import GeoPoint, offset
 from ..modes import Model, mode_name, mode_number
+from .ground_station import GroundStationAnswers
 
 ML = mavlink2
 
@@ -98,6 +99,8 @@ class SimState:
         self.wind_ne = (0.0, 0.0)
         """Where the wind blows an airborne copter, north and east in m/s."""
         self.commands_seen: list[int] = []
+        self.gcs = GroundStationAnswers(self, self.model)
+        """Parameters, streams and version, answered as ArduPilot does."""
 
     # ----------------------------------------------------------------- outputs
     def take_output(self) -> list[bytes]:

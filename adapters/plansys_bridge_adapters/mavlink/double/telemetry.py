@@ -144,7 +144,7 @@ class SimTelemetry(SimState):
                 self.p.home.alt + self.alt,
                 -self.vd,
             )
-        return None
+        return self.gcs.telemetry(msg_id)
 
     def _heartbeat(self) -> Any:
         base = ML.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | ML.MAV_MODE_FLAG_STABILIZE_ENABLED
