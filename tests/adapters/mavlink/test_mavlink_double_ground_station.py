@@ -254,3 +254,35 @@ def test_sitl_answers_the_same(sitl: Sitl) -> None:
     theirs = {name: kind for name, _value, kind in seen.values()}
     assert set(ours) <= set(theirs), sorted(set(ours) - set(theirs))
     assert {n: theirs[n] for n in ours} == ours
+
+
+@pytest.mark.sitl
+def test_rover_parameters_exist_in_sitl_with_their_types(sitl: Sitl) -> None:
+    rover = sitl.start("rover", speedup=10.0)
+    link = mavutil.mavlink_connection(rover.url, source_system=GCS, source_component=190)
+    try:
+        link.wait_heartbeat(timeout=60)
+        seen, texts = fetch_all(link)
+    finally:
+        link.close()
+    assert any(t.startswith("ArduRover V") for t in texts)
+    with VehicleDouble("rover", speedup=10, ekf_delay=2.0) as double:
+        ours = {p.name: p.type for p in double.sim.gcs.params}
+    theirs = {name: kind for name, _value, kind in seen.values()}
+    assert set(ours) <= set(theirs), sorted(set(ours) - set(theirs))
+    assert {n: theirs[n] for n in ours} == ours
+
+
+def test_rover_list_and_its_bound_speed() -> None:
+    with VehicleDouble("rover", speedup=10, ekf_delay=2.0) as double:
+        link = mavutil.mavlink_connection(double.url, source_system=GCS, source_component=190)
+        try:
+            hb = link.wait_heartbeat(timeout=10)
+            assert (hb.get_srcComponent(), hb.type) == (1, ml.MAV_TYPE_GROUND_ROVER)
+            seen, texts = fetch_all(link)
+            assert any(t.startswith("ArduRover V") for t in texts)
+            assert len(seen) == len(double.sim.gcs.params)
+            assert mavparm.MAVParmDict().mavset(link, "WP_SPEED", 3.5)
+        finally:
+            link.close()
+        assert double.sim.p.cruise_speed == pytest.approx(3.5)

@@ -1,10 +1,11 @@
 """The vehicle's safe mode on every way an action or a mission can end early.
 
 ``safe_mode`` (copter BRAKE by default, or LAND / RTL ...; rover HOLD) is applied on
-a cancel from the executor, on a failed action, when the link comes back after it
-was lost mid-action, and when ``plansys-bridge run`` is stopped by SIGINT or SIGTERM
-(a real signal to a real child process flying the vehicle double over TCP, and
-flying ArduPilot SITL where ``PLANSYS_BRIDGE_SITL_DIR`` names it).
+a cancel from the executor, on a failed action, when the mission aborts, when the
+link comes back after it was lost mid-action, and when ``plansys-bridge run`` is
+stopped by SIGINT or SIGTERM (a real signal to a real child process flying the
+vehicle double over TCP, and flying ArduPilot SITL where ``PLANSYS_BRIDGE_SITL_DIR``
+names it).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from __future__ import annotations
 import asyncio
 import signal
 import subprocess
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +22,7 @@ import yaml
 from mavlink_support import CONFIGS, SPEEDUP, build, make_hub, performer_config
 from plansys_bridge_adapters.mavlink.double import VehicleDouble
 from sitl_support import GroundStation, Sitl, cli, sitl_mission, start_cli
+from test_mavlink_missions import fast, load, run
 
 from plansys_bridge.hub.auction import ActionClient, AuctionPolicy
 from plansys_bridge.hub.hub import Hub
@@ -167,3 +170,26 @@ def test_a_signal_to_run_leaves_sitl_in_its_safe_mode(
         if proc.poll() is None:
             proc.kill()
             proc.communicate()
+
+
+def test_an_aborted_mission_leaves_the_copter_in_its_safe_mode() -> None:
+    # a low battery halts the flight; with no replan allowed the mission aborts
+    with VehicleDouble("copter", speedup=SPEEDUP, ekf_delay=4.0, cruise_speed=2.0) as double:
+        data = fast(load("mavlink_copter.yaml"))
+        entry = data["performers"][0]
+        del entry["double"]
+        entry.update(url=double.url, safe_mode="RTL")
+        data["replanning"] = {"max_replans": 0}
+        injector = threading.Thread(
+            target=lambda: (
+                double.wait_for(lambda s: s["north"] > 10, 30) and double.set_battery(15.0)
+            ),
+            name="low-battery",
+        )
+        injector.start()
+        try:
+            report = run(data)
+        finally:
+            injector.join()
+        assert not report.success, report.summary()
+        assert double.wait_for(lambda s: s["mode"] == "RTL", timeout=5), double.state()
