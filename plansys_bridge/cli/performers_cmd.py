@@ -67,6 +67,7 @@ async def _serve(mission: MissionConfig, clock: Clock, duration: float | None) -
 
     from plansys_bridge.hub.hub import Hub
     from plansys_bridge.mission import build_knowledge, load_domain, make_transport
+    from plansys_bridge.mission.session import mission_bid_costs
     from plansys_bridge.performers.base import PerformerContext
     from plansys_bridge.performers.remote import serve_performers
 
@@ -81,7 +82,11 @@ async def _serve(mission: MissionConfig, clock: Clock, duration: float | None) -
     await hub.start()
     try:
         context = PerformerContext(
-            hub=hub, clock=clock, knowledge=knowledge, base_dir=mission.base_dir
+            hub=hub,
+            clock=clock,
+            knowledge=knowledge,
+            base_dir=mission.base_dir,
+            bid_costs=mission_bid_costs(mission),
         )
         entries = [p.model_dump() for p in mission.performers]
 

@@ -24,9 +24,18 @@ from plansys_bridge.mission_config import EventConfig, MissionConfig
 from plansys_bridge.monitoring.watch import MissionWatch
 from plansys_bridge.pddl.model import Domain
 from plansys_bridge.performers.base import ActionPerformer, PerformerContext
+from plansys_bridge.performers.bid_costs import BidCosts, load_bid_costs
 from plansys_bridge.performers.registry import performers_from_config, start_performers
 
-__all__ = ["MissionSession", "Printer"]
+__all__ = ["MissionSession", "Printer", "mission_bid_costs"]
+
+
+def mission_bid_costs(mission: MissionConfig) -> dict[str, BidCosts]:
+    """The learned costs the mission's ``bid_costs:`` names, by performer."""
+    if mission.bid_costs is None:
+        return {}
+    return load_bid_costs(mission.resolve(mission.bid_costs))
+
 
 log = logging.getLogger(__name__)
 
@@ -92,6 +101,7 @@ class MissionSession:
                 knowledge=self.knowledge,
                 base_dir=self.mission.base_dir,
                 recorder=self.recorder,
+                bid_costs=mission_bid_costs(self.mission),
             )
             entries = [p.model_dump() | self._overrides for p in self.mission.performers]
             if self.mission.bridge is not None:
@@ -99,7 +109,6 @@ class MissionSession:
             if self.local_performers:
                 with in_mission_file(self.mission):
                     self.performers = performers_from_config(entries, context)
-                self._apply_bid_costs()
             await start_performers(self.performers, self._say)
             if not self.local_performers and self.await_performers:
                 await self._wait_for_remote_performers()
@@ -117,15 +126,6 @@ class MissionSession:
 
     async def __aexit__(self, *exc: object) -> None:
         await self._shutdown()
-
-    def _apply_bid_costs(self) -> None:
-        if self.mission.bid_costs is None:
-            return
-        from plansys_bridge.performers.bid_costs import load_bid_costs
-
-        costs = load_bid_costs(self.mission.resolve(self.mission.bid_costs))
-        for performer in self.performers:
-            performer.bid_costs = costs.get(performer.node_name)
 
     async def _wait_for_remote_performers(self) -> None:
         from plansys_bridge.performers.remote import wait_for_performers

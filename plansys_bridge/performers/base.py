@@ -113,7 +113,7 @@ class ActionPerformer(ABC):
         self._subs: list[Subscription] = []
         self._heartbeat_timer: asyncio.TimerHandle | None = None
         self._running = False
-        self.bid_costs: BidCosts | None = None
+        self.bid_costs: BidCosts | None = context.bid_costs.get(node_name)
         """Learned costs (the mission's ``bid_costs:``); where they know the action
         they are bid instead of :meth:`bid`."""
 

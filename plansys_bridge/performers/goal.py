@@ -8,7 +8,7 @@ PlanSys2's rule for a performer specialised to some arguments.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -20,6 +20,7 @@ from plansys_bridge.hub.messages import ActionExecution
 
 if TYPE_CHECKING:
     from plansys_bridge.knowledge.problem_expert import ProblemExpert
+    from plansys_bridge.performers.bid_costs import BidCosts
 
 __all__ = ["ActionFailed", "ActionGoal", "PerformerContext", "arguments_match", "same_goal"]
 
@@ -50,6 +51,8 @@ class PerformerContext:
     knowledge: ProblemExpert | None = None
     base_dir: Path = field(default_factory=Path)
     recorder: object | None = None
+    bid_costs: Mapping[str, BidCosts] = field(default_factory=dict)
+    """Learned costs by performer name (the mission's ``bid_costs:`` file)."""
 
 
 def arguments_match(specialized: Sequence[str], arguments: Sequence[str]) -> bool:
