@@ -5,7 +5,8 @@ process on the spot: a mission's actions are not cancelled and its performers no
 stopped (no zero-velocity command to a CAN base, no BRAKE for a copter). While a
 command runs, SIGTERM is handed to the SIGINT handler in force (asyncio's, which
 cancels the mission so that it shuts down in order), and the command then ends with
-``terminated`` and exit status 143 instead of 130.
+``terminated`` and exit status 143 instead of 130. Only the first SIGTERM counts: a
+supervisor or script sending it again does not interrupt the orderly stop.
 """
 
 from __future__ import annotations
@@ -26,6 +27,10 @@ class Termination:
         self.received = False
 
     def __call__(self, signum: int, frame: FrameType | None) -> None:
+        if self.received:
+            # already stopping in order (cancelling actions, making vehicles safe): a
+            # repeated SIGTERM must not cut that short; SIGKILL still ends it at once
+            return
         self.received = True
         handler = signal.getsignal(signal.SIGINT)
         if callable(handler):

@@ -14,6 +14,7 @@ import asyncio
 import signal
 import subprocess
 import threading
+import time
 from pathlib import Path
 from typing import Any
 
@@ -193,3 +194,28 @@ def test_an_aborted_mission_leaves_the_copter_in_its_safe_mode() -> None:
             injector.join()
         assert not report.success, report.summary()
         assert double.wait_for(lambda s: s["mode"] == "RTL", timeout=5), double.state()
+
+
+def test_a_repeated_sigterm_does_not_cut_the_safe_stop_short(tmp_path: Path) -> None:
+    # supervisors and scripts may send SIGTERM more than once; SIGKILL is the way to force
+    with VehicleDouble("copter", speedup=5, ekf_delay=2.0, cruise_speed=2.0) as double:
+        proc = subprocess.Popen(
+            [*cli(), "run", str(_mission(double, tmp_path, "LAND"))],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            stdin=subprocess.DEVNULL,
+            text=True,
+        )
+        try:
+            assert double.wait_for(lambda s: s["alt"] > 5 and s["north"] > 2, timeout=90)
+            for _ in range(3):
+                proc.send_signal(signal.SIGTERM)
+                time.sleep(0.02)
+            _out, err = proc.communicate(timeout=30)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.communicate()
+        assert proc.returncode == 143, err
+        assert "Traceback" not in err
+        assert double.state()["mode"] == "LAND", double.state()
