@@ -25,11 +25,10 @@ import enum
 import itertools
 import math
 from collections import deque
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import Any, Literal
+from collections.abc import Callable, Sequence
 
-from plansys_bridge.errors import ConfigError, HubError
+from plansys_bridge.errors import HubError
+from plansys_bridge.hub.auction_policy import ActionOutcome, AuctionPolicy, full_action_name
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.liveness import LivenessTable
 from plansys_bridge.hub.messages import (
@@ -39,7 +38,6 @@ from plansys_bridge.hub.messages import (
     Topics,
 )
 from plansys_bridge.hub.routing import client_keys
-from plansys_bridge.hub.settings import is_number, settings_from_mapping
 
 __all__ = [
     "ActionClient",
@@ -54,75 +52,6 @@ FeedbackCallback = Callable[[float, str], None]
 """Called as ``feedback_cb(completion, status)`` for every FEEDBACK of the confirmed performer."""
 
 _request_ids = itertools.count(1)
-
-
-def full_action_name(action: str, arguments: Sequence[str]) -> str:
-    """PlanSys2's action text: ``(move r2d2 kitchen bedroom)``."""
-    return "(" + " ".join((action, *arguments)) + ")"
-
-
-@dataclass(frozen=True)
-class AuctionPolicy:
-    """How the executor runs an auction; the mission file's ``auction:`` settings."""
-
-    retry_period: float = 1.0
-    """Re-send REQUEST this often (loop seconds) while nobody answers."""
-    give_up_after: float = 30.0
-    """Stop the auction (and the REQUESTs) if nobody answered after this long."""
-    selection: Literal["first", "best_bid"] = "first"
-    """``first``: PlanSys2's first responder wins; ``best_bid``: lowest bid wins."""
-    bid_window: float = 0.05
-    """With ``best_bid``: how long to collect bids after the first RESPONSE.
-
-    Keep it well under the performers' ``commit_timeout`` (2 s by default): a bidder
-    stops waiting for CONFIRM after that and would then be declared lost."""
-    liveness_timeout: float = 5.0
-    """A confirmed performer silent (no FEEDBACK, no RUNNING heartbeat) this long is lost."""
-    reauctions: int = 1
-    """How many times an action whose performer was lost is auctioned again."""
-
-    def __post_init__(self) -> None:
-        for name in ("retry_period", "give_up_after", "liveness_timeout"):
-            value = getattr(self, name)
-            if not is_number(value) or not value > 0:
-                raise ConfigError(f"must be a number > 0, got {value!r}", key=f"auction.{name}")
-        if not is_number(self.bid_window) or self.bid_window < 0:
-            raise ConfigError(
-                f"must be a number >= 0, got {self.bid_window!r}", key="auction.bid_window"
-            )
-        if isinstance(self.reauctions, bool) or not isinstance(self.reauctions, int):
-            raise ConfigError(
-                f"must be an integer, got {self.reauctions!r}", key="auction.reauctions"
-            )
-        if self.reauctions < 0:
-            raise ConfigError(f"must be >= 0, got {self.reauctions}", key="auction.reauctions")
-        if self.selection not in ("first", "best_bid"):
-            raise ConfigError(
-                f"must be 'first' or 'best_bid', got {self.selection!r}", key="auction.selection"
-            )
-
-    @classmethod
-    def from_config(cls, config: Mapping[str, Any] | None, key: str = "auction") -> AuctionPolicy:
-        """Build from a mapping, rejecting unknown keys with ``ConfigError(key=...)``."""
-        return settings_from_mapping(cls, config, key)
-
-
-@dataclass(frozen=True)
-class ActionOutcome:
-    """How one action ended, as the executor sees it."""
-
-    success: bool
-    status: str
-    """The performer's FINISH status, or why the action failed or stopped."""
-    completion: float
-    performer: str
-    """The node that last held the action ("" if none was ever confirmed)."""
-    reauctioned: int
-    cancelled: bool = False
-    gave_up: bool = False
-    """Nobody answered the REQUEST within ``give_up_after``."""
-    lost_performers: tuple[str, ...] = field(default_factory=tuple)
-    """Performers declared lost (no feedback or heartbeat) during this action."""
 
 
 class ClientPhase(enum.Enum):
