@@ -157,17 +157,12 @@ class Evaluator(Reasoner):
         except KeyError:
             raise KnowledgeError(f"unknown action {name!r} in domain {self.domain.name}") from None
 
-    def ground_action(
-        self,
-        action: AnyAction | str,
-        args: Sequence[str],
-        state: State | None = None,
-    ) -> GroundAction:
-        """``action`` with ``args`` for its parameters.
+    def bind(
+        self, action: AnyAction | str, args: Sequence[str], state: State | None = None
+    ) -> tuple[AnyAction, dict[str, str]]:
+        """``action`` and its parameters' bindings to ``args``, nothing substituted.
 
-        With a ``state`` the arguments are checked (known objects of the right type)
-        and the duration is evaluated there; without one a duration that reads
-        fluents is left as None.
+        With a ``state`` the arguments are checked: known objects of the right type.
         """
         act = self.get_action(action) if isinstance(action, str) else action
         arguments = tuple(a.lower() for a in args)
@@ -188,7 +183,22 @@ class Evaluator(Reasoner):
                         f"action ({act.name} {' '.join(arguments)}): {arg} is a {obj_type}, "
                         f"parameter {param.name} wants {' or '.join(param.types)}"
                     )
-        b = {p.name: a for p, a in zip(act.parameters, arguments, strict=True)}
+        return act, {p.name: a for p, a in zip(act.parameters, arguments, strict=True)}
+
+    def ground_action(
+        self,
+        action: AnyAction | str,
+        args: Sequence[str],
+        state: State | None = None,
+    ) -> GroundAction:
+        """``action`` with ``args`` for its parameters.
+
+        With a ``state`` the arguments are checked (known objects of the right type)
+        and the duration is evaluated there; without one a duration that reads
+        fluents is left as None.
+        """
+        act, b = self.bind(action, args, state)
+        arguments = tuple(b.values())
         if isinstance(act, Action):
             return GroundAction(
                 name=act.name,

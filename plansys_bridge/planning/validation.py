@@ -15,46 +15,39 @@ timeline with the same condition semantics the executor uses (the knowledge
   ``epsilon`` are refused too, as VAL does.
 
 The report names the first failing step (in time order) and the failing part of the
-condition, with numeric values where they explain the failure.
+condition, with numeric values where they explain the failure. Conditions and
+effects are evaluated lifted, with each step's bindings (substituting the arguments
+into every formula of every step was a third of a validation); what interferes is
+worked out by :mod:`~plansys_bridge.planning.mutex`.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
-from typing import Literal
 
 from plansys_bridge.errors import PlansysBridgeError
-from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
+from plansys_bridge.knowledge.evaluation import Evaluator
+from plansys_bridge.knowledge.grounding import substitute_condition
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import (
     And,
-    AndEffect,
     Atom,
-    BinaryOp,
     Compare,
     Condition,
     Domain,
     DurativeAction,
-    Effect,
-    FluentRef,
-    Negate,
-    NumericEffect,
-    NumExpr,
     Problem,
-    WhenEffect,
-    is_variable,
 )
+from plansys_bridge.planning.happenings import SAME_TIME, BoundStep, Happening, simultaneous
+from plansys_bridge.planning.mutex import Footprint, Footprints
 from plansys_bridge.planning.plan import Plan, PlanStep
 
 __all__ = ["DEFAULT_EPSILON", "ValidationReport", "initial_state", "validate_plan"]
 
 DEFAULT_EPSILON = 0.001
-SAME_TIME = 1e-6
-"""Happenings closer than this are simultaneous (plan files print 3-4 decimals)."""
 _SLACK = 1e-6
-
-Point = Literal["start", "end", "instant"]
 
 
 @dataclass(frozen=True)
@@ -88,94 +81,24 @@ def initial_state(domain: Domain, problem: Problem) -> State:
     return State(problem.init, fluents, objects)
 
 
-@dataclass
-class _Happening:
-    time: float
-    index: int
-    point: Point
-    ground: GroundAction
-    duration: float | None
-
-    @property
-    def condition(self) -> Condition:
-        g = self.ground
-        if self.point == "start":
-            return g.at_start
-        if self.point == "end":
-            return g.at_end
-        return g.over_all
-
-    @property
-    def when(self) -> str:
-        return {
-            "start": "at start condition",
-            "end": "at end condition",
-            "instant": "precondition",
-        }[self.point]
-
-    @property
-    def effect(self) -> Effect:
-        return self.ground.start_effect if self.point == "start" else self.ground.end_effect
-
-    def sort_key(self) -> tuple[float, int, int]:
-        # ends before starts at one time: an interval closes before the next opens
-        order = {"end": 0, "instant": 1, "start": 2}[self.point]
-        return (self.time, order, self.index)
-
-
-@dataclass
-class _Footprint:
-    """What one happening reads and writes (ground atoms and fluents)."""
-
-    reads: set[Atom]
-    adds: set[Atom]
-    deletes: set[Atom]
-    fluent_reads: set[FluentKey]
-    fluent_writes: set[FluentKey]
-    fluent_additive: set[FluentKey] = field(default_factory=set)
-    """Written only by ``increase``/``decrease``: commutes with another such write."""
-
-    def interferes(self, other: _Footprint) -> str | None:
-        """The shared atom or fluent that makes the two interfere, or None."""
-        for mine, theirs in (
-            (self.adds, other.deletes),
-            (self.deletes, other.adds),
-            (self.adds | self.deletes, other.reads),
-            (other.adds | other.deletes, self.reads),
-        ):
-            common = mine & theirs
-            if common:
-                return str(sorted(common, key=str)[0])
-        # PDDL 2.1 (Fox & Long 2003, section 8): a fluent one changes must not be read
-        # by the other (conditions, right-hand sides), and both may change it only if
-        # both do so additively (increase/decrease commute).
-        both_additive = self.fluent_additive & other.fluent_additive
-        for fcommon in (
-            self.fluent_writes & other.fluent_reads,
-            other.fluent_writes & self.fluent_reads,
-            (self.fluent_writes & other.fluent_writes) - both_additive,
-        ):
-            if fcommon:
-                name, args = sorted(fcommon)[0]
-                return "(" + " ".join((name, *args)) + ")"
-        return None
-
-
 class _Prints:
     """The footprints of one group of simultaneous happenings, worked out on first use:
     only simultaneous steps and happenings closer than epsilon are compared, and
     computing every footprint was most of a validation's time."""
 
-    def __init__(self, validator: _Validator, group: list[_Happening], state: State) -> None:
+    def __init__(self, validator: _Validator, group: list[Happening], state: State) -> None:
         self._validator = validator
         self._group = group
         self._state = state
-        self._prints: list[tuple[_Happening, _Footprint]] | None = None
+        self._prints: list[tuple[Happening, Footprint]] | None = None
 
-    def get(self) -> list[tuple[_Happening, _Footprint]]:
+    def get(self) -> list[tuple[Happening, Footprint]]:
         if self._prints is None:
-            footprint = self._validator._footprint
-            self._prints = [(h, footprint(h, self._state)) for h in self._group]
+            footprints = self._validator.footprints
+            self._prints = [
+                (h, footprints.of(h.condition, h.effect, h.bindings, self._state))
+                for h in self._group
+            ]
         return self._prints
 
 
@@ -215,6 +138,8 @@ class _Validator:
         self.problem = problem
         self.plan = plan
         self.ev = Evaluator(domain)
+        self.footprints = Footprints(self.ev)
+        self._over_all_reads: dict[int, tuple[set[Atom], set[FluentKey]] | None] = {}
         self.state = state if state is not None else initial_state(domain, problem)
         self.epsilon = epsilon
         self.duration_tolerance = duration_tolerance
@@ -249,18 +174,9 @@ class _Validator:
     def run(self) -> ValidationReport:
         happenings = self._happenings()
         state = self.state
-        open_steps: dict[int, _Happening] = {}
+        open_steps: dict[int, Happening] = {}
         recent: list[tuple[float, _Prints]] = []
-        position = 0
-        while position < len(happenings):
-            group = [happenings[position]]
-            position += 1
-            while (
-                position < len(happenings)
-                and happenings[position].time - group[0].time <= SAME_TIME
-            ):
-                group.append(happenings[position])
-                position += 1
+        for group in simultaneous(happenings):
             state = self._group(group, state, open_steps, recent)
         for h in open_steps.values():  # only reachable with inconsistent input
             raise self.fail(h.index, "never ends")
@@ -272,30 +188,31 @@ class _Validator:
             final_state=state,
         )
 
-    def _happenings(self) -> list[_Happening]:
-        out: list[_Happening] = []
+    def _happenings(self) -> list[Happening]:
+        out: list[Happening] = []
         for i, step in enumerate(self.plan.steps):
             if not math.isfinite(step.time) or step.time < 0:
                 raise self.fail(i, f"start time {step.time} is not a time >= 0")
             try:
-                g = self.ev.ground_action(step.action, step.arguments, self.state)
+                action, bindings = self.ev.bind(step.action, step.arguments, self.state)
             except PlansysBridgeError as exc:
                 raise self.fail(i, str(exc)) from exc
-            if isinstance(g.action, DurativeAction):
+            g = BoundStep(action, bindings)
+            if isinstance(action, DurativeAction):
                 if not math.isfinite(step.duration) or step.duration < 0:
                     raise self.fail(i, f"duration {step.duration} is not a duration >= 0")
-                out.append(_Happening(step.time, i, "start", g, step.duration))
-                out.append(_Happening(step.time + step.duration, i, "end", g, step.duration))
+                out.append(Happening(step.time, i, "start", g, step.duration))
+                out.append(Happening(step.time + step.duration, i, "end", g, step.duration))
             else:
-                out.append(_Happening(step.time, i, "instant", g, None))
-        out.sort(key=_Happening.sort_key)
+                out.append(Happening(step.time, i, "instant", g, None))
+        out.sort(key=Happening.sort_key)
         return out
 
     def _group(
         self,
-        group: list[_Happening],
+        group: list[Happening],
         state: State,
-        open_steps: dict[int, _Happening],
+        open_steps: dict[int, Happening],
         recent: list[tuple[float, _Prints]],
     ) -> State:
         now = group[0].time
@@ -325,27 +242,48 @@ class _Validator:
                         now,
                     )
         self._check_separation(now, prints, recent)
+        changed: set[object] = set()
         for h in group:
             try:
-                state = self.ev.apply(h.effect, state, {}, h.duration)
+                adds, deletes, values = self.ev.changes(h.effect, state, h.bindings, h.duration)
             except PlansysBridgeError as exc:
                 raise self.fail(
                     h.index, f"{h.point} effect cannot be applied: {exc}", None, now
                 ) from exc
+            state = state.with_changes(adds=adds, deletes=deletes, fluents=values)
+            changed.update(adds, deletes, values)
+        started = set()
         for h in group:
             if h.point == "start":
                 open_steps[h.index] = h
+                started.add(h.index)
             elif h.point == "end":
                 open_steps.pop(h.index, None)
         for index in sorted(open_steps):
             h = open_steps[index]
             end = h.time + (h.duration or 0.0)
-            if end - now > SAME_TIME:
-                self._check(h, h.ground.over_all, "over all condition", state, now)
+            if end - now > SAME_TIME and (index in started or self._touched(h, changed)):
+                self._check(h, h.bound.over_all, "over all condition", state, now)
         return state
 
+    def _touched(self, h: Happening, changed: set[object]) -> bool:
+        """Could the changes of this group have made ``h``'s over-all condition false?
+
+        It held after its start and at every later change; what does not change what
+        it reads leaves it true.
+        """
+        if not changed:
+            return False
+        if h.index not in self._over_all_reads:
+            self._over_all_reads[h.index] = self.footprints.reads(h.bound.over_all, h.bindings)
+        reads = self._over_all_reads[h.index]
+        if reads is None:
+            return True
+        atoms, fluents = reads
+        return not (changed.isdisjoint(atoms) and changed.isdisjoint(fluents))
+
     def _explain_simultaneous(
-        self, exc: _Invalid, h: _Happening, prints: list[tuple[_Happening, _Footprint]]
+        self, exc: _Invalid, h: Happening, prints: list[tuple[Happening, Footprint]]
     ) -> _Invalid:
         """A condition false only because its achiever happens at the same time: say so."""
         failing = exc.report.failing_condition
@@ -389,13 +327,13 @@ class _Validator:
                         )
         recent.append((now, prints))
 
-    def _check_duration(self, h: _Happening, state: State) -> None:
-        action = h.ground.action
+    def _check_duration(self, h: Happening, state: State) -> None:
+        action = h.bound.action
         if not isinstance(action, DurativeAction) or h.duration is None:
             return
         for constraint in action.duration:
             try:
-                value = self.ev.value(constraint.value, state, h.ground.bindings)
+                value = self.ev.value(constraint.value, state, h.bindings)
             except PlansysBridgeError as exc:
                 raise self.fail(
                     h.index, f"duration cannot be evaluated: {exc}", None, h.time
@@ -417,16 +355,16 @@ class _Validator:
 
     def _check(
         self,
-        h: _Happening,
+        h: Happening,
         cond: Condition,
         when: str,
         state: State,
         time: float | None = None,
     ) -> None:
         try:
-            if self.ev.holds(cond, state, {}, h.duration):
+            if self.ev.holds(cond, state, h.bindings, h.duration):
                 return
-            failing = self._first_false(cond, state, h.duration)
+            failing = self._first_false(cond, state, h.duration, h.bindings)
         except PlansysBridgeError as exc:
             raise self.fail(
                 h.index,
@@ -434,31 +372,23 @@ class _Validator:
                 None,
                 time if time is not None else h.time,
             ) from exc
-        text = _describe(failing, state, self.ev, h.duration)
+        text = _describe(substitute_condition(failing, h.bindings), state, self.ev, h.duration)
         moment = time if time is not None else h.time
         suffix = f" at {_t(moment)}" if when.startswith("over all") else ""
         raise self.fail(h.index, f"{when} {text} is false{suffix}", text, moment)
 
-    def _first_false(self, cond: Condition, state: State, duration: float | None) -> Condition:
+    def _first_false(
+        self,
+        cond: Condition,
+        state: State,
+        duration: float | None,
+        bindings: Mapping[str, str] | None = None,
+    ) -> Condition:
         if isinstance(cond, And):
             for part in cond.operands:
-                if not self.ev.holds(part, state, {}, duration):
-                    return self._first_false(part, state, duration)
+                if not self.ev.holds(part, state, bindings, duration):
+                    return self._first_false(part, state, duration, bindings)
         return cond
-
-    def _footprint(self, h: _Happening, state: State) -> _Footprint:
-        cond = h.condition
-        pos, neg = self.ev.condition_atoms(cond, {}, state)
-        adds, deletes, written = self.ev.effect_atoms(h.effect, {}, state)
-        effect_reads, additive = _numeric_accesses(self.ev, h.effect, state)
-        return _Footprint(
-            pos | neg,
-            adds,
-            deletes,
-            self.ev.condition_fluents(cond, {}, state) | effect_reads,
-            written,
-            additive & written,
-        )
 
     def _goal(self, state: State) -> None:
         goal = self.problem.goal
@@ -475,48 +405,6 @@ class _Validator:
             text,
             self.plan.makespan,
         )
-
-
-def _numeric_accesses(
-    ev: Evaluator, effect: Effect, state: State
-) -> tuple[set[FluentKey], set[FluentKey]]:
-    """Fluents an effect reads (values on the right of numeric effects, conditions of
-    ``when`` parts) and those it changes only additively (``increase``/``decrease``
-    and no other kind of assignment). ``forall`` bodies with free variables are left
-    to the mutex check on what they write, which then counts as not additive."""
-    reads: set[FluentKey] = set()
-    additive: set[FluentKey] = set()
-    other: set[FluentKey] = set()
-
-    def visit(eff: Effect) -> None:
-        if isinstance(eff, AndEffect):
-            for sub in eff.effects:
-                visit(sub)
-        elif isinstance(eff, WhenEffect):
-            reads.update(ev.condition_fluents(eff.condition, {}, state))
-            visit(eff.effect)
-        elif isinstance(eff, NumericEffect):
-            reads.update(
-                (ref.name, ref.args)
-                for ref in _fluent_refs(eff.value)
-                if not any(is_variable(a) for a in ref.args)
-            )
-            if not any(is_variable(a) for a in eff.fluent.args):
-                key = (eff.fluent.name, eff.fluent.args)
-                (additive if eff.op in ("increase", "decrease") else other).add(key)
-
-    visit(effect)
-    return reads, additive - other
-
-
-def _fluent_refs(expr: NumExpr) -> list[FluentRef]:
-    if isinstance(expr, FluentRef):
-        return [expr]
-    if isinstance(expr, BinaryOp):
-        return _fluent_refs(expr.left) + _fluent_refs(expr.right)
-    if isinstance(expr, Negate):
-        return _fluent_refs(expr.operand)
-    return []
 
 
 def _describe(cond: Condition, state: State, ev: Evaluator, duration: float | None) -> str:
