@@ -151,8 +151,8 @@ def bridge_latency(core: Roscore, n: int) -> dict[str, Any]:
     from cyclonedds.sub import DataReader
     from cyclonedds.topic import Topic
 
-    from plansys_bridge.hub.dds import _SharedDomain
     from plansys_bridge.hub.dds_config import loopback_config
+    from plansys_bridge.hub.dds_participant import SharedDomain
     from plansys_bridge.interfaces.dds import dds_type
 
     domain = 87
@@ -180,7 +180,7 @@ def bridge_latency(core: Roscore, n: int) -> dict[str, Any]:
             with lock:
                 ros2_lat.append(now - (s.header.stamp.sec + s.header.stamp.nanosec * 1e-9))
 
-    _SharedDomain.acquire(domain, loopback_config(domain))
+    SharedDomain.acquire(domain, loopback_config(domain))
     participant = DomainParticipant(domain)
     reader = DataReader(
         participant,
@@ -217,7 +217,7 @@ def bridge_latency(core: Roscore, n: int) -> dict[str, Any]:
         bridge.terminate()
         bridge.wait(timeout=30)
         del reader
-        _SharedDomain.release(domain)
+        SharedDomain.release(domain)
     direct, bridged = summary(ros1_lat), summary(ros2_lat)
     return {
         "direct_ros1": direct,

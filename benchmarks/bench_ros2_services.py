@@ -33,8 +33,8 @@ from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
-from plansys_bridge.hub.dds import _SharedDomain
 from plansys_bridge.hub.dds_config import loopback_config
+from plansys_bridge.hub.dds_participant import SharedDomain
 from plansys_bridge.interfaces.dds import dds_type
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.pddl.parser import parse_domain
@@ -175,7 +175,7 @@ def bench_raw(domain: int, n: int, warmup: int, request_size: int, reply_size: i
 async def main_async(args: argparse.Namespace) -> dict[str, Any]:
     domain = random.SystemRandom().randint(1, 232)
     # Every participant of the run, the bare ones too, on the loopback-only configuration.
-    _SharedDomain.acquire(domain, loopback_config(domain))
+    SharedDomain.acquire(domain, loopback_config(domain))
     try:
         service, request_size, reply_size = await bench_service(
             domain, args.n, args.warmup, args.instances
@@ -185,7 +185,7 @@ async def main_async(args: argparse.Namespace) -> dict[str, Any]:
             bench_raw, domain, args.n, args.warmup, request_size, reply_size
         )
     finally:
-        _SharedDomain.release(domain)
+        SharedDomain.release(domain)
     return {
         "n": args.n,
         "instances": args.instances,

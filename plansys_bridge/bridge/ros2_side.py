@@ -27,8 +27,8 @@ from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
 from plansys_bridge.bridge.config import Qos as QosConfig
-from plansys_bridge.hub.dds import _SharedDomain
 from plansys_bridge.hub.dds_config import loopback_config
+from plansys_bridge.hub.dds_participant import SharedDomain
 from plansys_bridge.interfaces.dds import dds_type
 from plansys_bridge.interfaces.typestore import ros2_typestore
 
@@ -67,7 +67,7 @@ class Ros2Side:
     def __init__(self, domain_id: int) -> None:
         self.domain_id = domain_id
         self.store = ros2_typestore()
-        _SharedDomain.acquire(domain_id, loopback_config(domain_id))
+        SharedDomain.acquire(domain_id, loopback_config(domain_id))
         self._participant: DomainParticipant | None = DomainParticipant(domain_id)
         self._entities: list[Any] = []
 
@@ -75,7 +75,7 @@ class Ros2Side:
         self._entities.clear()
         if self._participant is not None:
             self._participant = None
-            _SharedDomain.release(self.domain_id)
+            SharedDomain.release(self.domain_id)
 
     def _topic(self, name: str, type_name: str) -> Topic:
         assert self._participant is not None

@@ -50,7 +50,6 @@ from typing import Any
 from cyclonedds._clayer import ddspy_take, ddspy_write
 from cyclonedds.core import (
     DDSException,
-    GuardCondition,
     InstanceState,
     Listener,
     Policy,
@@ -58,13 +57,10 @@ from cyclonedds.core import (
     ReadCondition,
     SampleState,
     ViewState,
-    WaitSet,
 )
-from cyclonedds.domain import Domain, DomainParticipant
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
-from cyclonedds.util import duration
 
 from plansys_bridge.clock import VirtualTimeEventLoop
 from plansys_bridge.errors import HubError
@@ -72,6 +68,7 @@ from plansys_bridge.hub.dds_checks import SampleCheck, check_sample
 from plansys_bridge.hub.dds_codec import ROUTES, Channel, Route, wire_sources
 from plansys_bridge.hub.dds_config import check_domain_id, loopback_config
 from plansys_bridge.hub.dds_discovery import publish_discovery_info
+from plansys_bridge.hub.dds_participant import DdsParticipant, endpoint_qos
 from plansys_bridge.hub.messages import Topics
 from plansys_bridge.hub.transport import InProcessTransport, Subscription
 
@@ -85,51 +82,7 @@ PROJECT_MARKER = b"plansys_bridge"
 """USER_DATA of this project's plain-topic writers (their messages also go wrapped)."""
 
 _TAKE_BATCH = 64
-_WAIT_NS = duration(seconds=1)
 _ANY_SAMPLE = SampleState.Any | ViewState.Any | InstanceState.Any
-
-
-class _SharedDomain:
-    """One Cyclone domain per id and process, shared by the transports that use it.
-
-    ``dds_create_domain`` refuses a second creation of the same id in one process, so
-    transports of one process (tests, benchmarks) share it, with a reference count.
-    """
-
-    _lock = threading.Lock()
-    _domains: dict[int, tuple[Domain, str, int]] = {}
-
-    @classmethod
-    def acquire(cls, domain_id: int, config: str) -> None:
-        with cls._lock:
-            entry = cls._domains.get(domain_id)
-            if entry is not None:
-                domain, existing, count = entry
-                if existing != config:
-                    raise HubError(
-                        f"DDS domain {domain_id} is already open in this process with "
-                        "another configuration"
-                    )
-                cls._domains[domain_id] = (domain, existing, count + 1)
-                return
-            try:
-                domain = Domain(domain_id, config)
-            except DDSException as exc:
-                raise HubError(f"cannot create DDS domain {domain_id}: {exc}") from exc
-            cls._domains[domain_id] = (domain, config, 1)
-
-    @classmethod
-    def release(cls, domain_id: int) -> None:
-        with cls._lock:
-            entry = cls._domains.get(domain_id)
-            if entry is None:
-                return
-            domain, config, count = entry
-            if count > 1:
-                cls._domains[domain_id] = (domain, config, count - 1)
-                return
-            del cls._domains[domain_id]
-            _delete(domain)
 
 
 def _write(endpoint: _Endpoint, sample: Any) -> None:
@@ -146,11 +99,6 @@ def _reader_participants(writer: Any) -> set[Any]:
         endpoint = writer.get_matched_subscription_data(handle)
         keys.add(None if endpoint is None else endpoint.participant_key)
     return keys
-
-
-def _delete(entity: Any) -> None:
-    """Delete a DDS entity now instead of whenever the garbage collector gets to it."""
-    entity.__del__()
 
 
 @dataclass
@@ -174,19 +122,13 @@ def _qos(channel: Channel, *, reader: bool = False, marked: bool = False) -> Qos
     their own participant, whose messages the transport delivers itself.
     """
     qos = channel.qos
-    policies: list[Any] = [
-        Policy.Reliability.Reliable(duration(seconds=1))
-        if qos.reliable
-        else Policy.Reliability.BestEffort,
-        Policy.History.KeepAll if reader else Policy.History.KeepLast(qos.depth),
-        Policy.IgnoreLocal.Participant,
-        Policy.Durability.TransientLocal if qos.transient_local else Policy.Durability.Volatile,
-        # ROS 2 (rmw_cyclonedds) speaks XCDR1; say so rather than rely on defaults.
-        Policy.DataRepresentation(use_cdrv0_representation=True),
-    ]
-    if marked:
-        policies.append(Policy.Userdata(PROJECT_MARKER))
-    return Qos(*policies)
+    return endpoint_qos(
+        depth=None if reader else qos.depth,
+        transient_local=qos.transient_local,
+        reliable=qos.reliable,
+        user_data=PROJECT_MARKER if marked else None,
+        ignore_local=True,
+    )
 
 
 class DdsTransport:
@@ -223,12 +165,7 @@ class DdsTransport:
         """Per wrapped hub topic: does a reader outside the project read its plain topic?"""
         self._project_writers: set[int] = set()
         self._loop: asyncio.AbstractEventLoop | None = None
-        self._participant: Any = None
-        self._waitset: Any = None
-        self._guard: Any = None
-        self._thread: threading.Thread | None = None
-        self._stopping = False
-        self._domain_held = False
+        self._dds = DdsParticipant(self.domain_id, self.config, f"dds-hub-{self.domain_id}")
         self._closed = False
         self._warned_local: set[str] = set()
         self.published = 0
@@ -240,7 +177,7 @@ class DdsTransport:
     async def start(self) -> None:
         if self._closed:
             raise HubError("cannot start a closed DDS transport")
-        if self._thread is not None:
+        if self._dds.running:
             return
         loop = asyncio.get_running_loop()
         if isinstance(loop, VirtualTimeEventLoop):
@@ -255,19 +192,11 @@ class DdsTransport:
         except BaseException:
             self._teardown()
             raise
-        self._thread = threading.Thread(
-            target=self._read_loop, name=f"dds-hub-{self.domain_id}", daemon=True
-        )
-        self._thread.start()
+        self._dds.start(self._poll)
 
     def _open(self) -> None:
-        _SharedDomain.acquire(self.domain_id, self.config)
-        self._domain_held = True
+        self._dds.open()
         try:
-            self._participant = DomainParticipant(self.domain_id)
-            self._waitset = WaitSet(self._participant)
-            self._guard = GuardCondition(self._participant)
-            self._waitset.attach(self._guard)
             for route in ROUTES.values():
                 made = []
                 for channel in route.channels:
@@ -276,7 +205,7 @@ class DdsTransport:
                     made.append(endpoint)
                 self._writers[route.hub_topic] = (made[0], made[1] if len(made) > 1 else None)
             self._discovery = publish_discovery_info(
-                self._participant,
+                self._dds.participant,
                 self.node_name,
                 readers=[ep.reader for ep in self._endpoints],
                 writers=[ep.writer for ep in self._endpoints],
@@ -285,14 +214,14 @@ class DdsTransport:
             raise HubError(f"DDS domain {self.domain_id}: cannot create endpoints: {exc}") from exc
 
     def _endpoint(self, route: Route, channel: Channel) -> _Endpoint:
-        p = self._participant
+        p = self._dds.participant
         topic = Topic(p, channel.dds_topic, channel.idl_type)
         marked = not channel.project and route.project is not None
         listener = Listener(on_publication_matched=lambda *_: self._rematch.set())
         writer = DataWriter(p, topic, _qos(channel, marked=marked), listener=listener)
         reader = DataReader(p, topic, _qos(channel, reader=True))
         condition = ReadCondition(reader, _ANY_SAMPLE)
-        self._waitset.attach(condition)
+        self._dds.attach(condition)
         return _Endpoint(route, channel, topic, writer, reader, condition)
 
     async def close(self) -> None:
@@ -301,27 +230,13 @@ class DdsTransport:
         self._teardown()
 
     def _teardown(self) -> None:
-        self._stopping = True
-        thread, self._thread = self._thread, None
-        if thread is not None:
-            self._guard.set(True)
-            thread.join(timeout=5.0)
-            if thread.is_alive():  # pragma: no cover - the wait set wakes within 1 s
-                log.error("DDS reader thread of domain %d did not stop", self.domain_id)
         entities: list[Any] = list(self._discovery or ())
         self._discovery = None
         for ep in self._endpoints:
             entities += [ep.condition, ep.reader, ep.writer, ep.topic]
-        entities += [self._guard, self._waitset, self._participant]
-        for entity in entities:
-            if entity is not None:
-                _delete(entity)
+        self._dds.close(entities)
         self._endpoints.clear()
         self._writers.clear()
-        self._guard = self._waitset = self._participant = None
-        if self._domain_held:
-            self._domain_held = False
-            _SharedDomain.release(self.domain_id)
 
     @property
     def closed(self) -> bool:
@@ -339,7 +254,7 @@ class DdsTransport:
     def publish(self, topic: str, msg: object) -> None:
         if self._closed:
             raise HubError(f"cannot publish on {topic!r}: transport closed")
-        if self._thread is None or self._loop is None:
+        if not self._dds.running or self._loop is None:
             raise HubError(f"cannot publish on {topic!r}: start the DDS transport first")
         route = ROUTES.get(topic)
         if route is None:
@@ -409,7 +324,7 @@ class DdsTransport:
         lose its first messages waits here (the auction re-sends REQUESTs anyway).
         Every DDS topic of the hub topic counts: the plain one and the project wrapper.
         """
-        if self._thread is None:
+        if not self._dds.running:
             raise HubError("start the DDS transport before waiting for peers")
         route = ROUTES.get(topic)
         if route is None:
@@ -430,23 +345,14 @@ class DdsTransport:
             await asyncio.sleep(0.02)
 
     # -- receiving ---------------------------------------------------------------------
-    def _read_loop(self) -> None:
-        try:
-            while not self._stopping:
-                self._waitset.wait(_WAIT_NS)
-                if self._stopping:
-                    break
-                batch: list[tuple[str, object]] = []
-                for ep in self._endpoints:
-                    topic = ep.route.hub_topic
-                    batch += ((topic, msg) for msg in self._take(ep))
-                if batch:
-                    # From this thread: one call_soon_threadsafe for the whole batch.
-                    self._fanout.publish_batch(batch)
-        except (RuntimeError, HubError):  # loop or transport closed: nobody to deliver to
-            return
-        except Exception:  # pragma: no cover - a DDS failure must not die silently
-            log.exception("DDS reader thread of domain %d failed", self.domain_id)
+    def _poll(self) -> None:
+        """On the reader thread: take what arrived, hand it to the loop in one batch."""
+        batch: list[tuple[str, object]] = []
+        for ep in self._endpoints:
+            topic = ep.route.hub_topic
+            batch += ((topic, msg) for msg in self._take(ep))
+        if batch:
+            self._fanout.publish_batch(batch)
 
     def _take(self, ep: _Endpoint) -> list[object]:
         batch: list[object] = []
@@ -523,5 +429,5 @@ class DdsTransport:
         return keys
 
     def __repr__(self) -> str:
-        state = "closed" if self._closed else "started" if self._thread else "new"
+        state = "closed" if self._closed else "started" if self._dds.running else "new"
         return f"DdsTransport(domain_id={self.domain_id}, {state})"

@@ -8,10 +8,10 @@ One thread per node waits on a DDS wait set over every reader and hands each val
 sample to its reader's callback with ``call_soon_threadsafe``: callbacks run on the
 loop, in arrival order per reader, never on the DDS thread.
 
-The Cyclone domain is shared with the hub's DDS transport of the same process
-(:class:`~plansys_bridge.hub.dds.DdsTransport`): Cyclone allows one creation of a
-domain id per process, so both go through the same reference-counted holder and must
-be given the same configuration (loopback-only by default).
+The participant, its thread, the shared domain and the QoS are those of the hub's DDS
+transport (:mod:`plansys_bridge.hub.dds_participant`): Cyclone allows one creation
+of a domain id per process, so both must be given the same configuration
+(loopback-only by default).
 """
 
 from __future__ import annotations
@@ -25,24 +25,20 @@ from typing import Any
 
 from cyclonedds.core import (
     DDSException,
-    GuardCondition,
     InstanceState,
-    Policy,
     Qos,
     ReadCondition,
     SampleState,
     ViewState,
-    WaitSet,
 )
-from cyclonedds.domain import DomainParticipant
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
 from plansys_bridge.errors import HubError
-from plansys_bridge.hub.dds import _SharedDomain
 from plansys_bridge.hub.dds_config import check_domain_id, loopback_config
+from plansys_bridge.hub.dds_participant import DdsParticipant, endpoint_qos
 
 __all__ = [
     "ACTION_STATUS_QOS",
@@ -78,18 +74,9 @@ class EndpointQos:
     transient_local: bool = False
 
     def qos(self, *, user_data: bytes | None = None) -> Qos:
-        policies: list[Any] = [
-            Policy.Reliability.Reliable(duration(seconds=1)),
-            Policy.History.KeepLast(self.depth),
-            Policy.Durability.TransientLocal
-            if self.transient_local
-            else Policy.Durability.Volatile,
-            # ROS 2 on Cyclone DDS (rmw_cyclonedds) speaks XCDR1.
-            Policy.DataRepresentation(use_cdrv0_representation=True),
-        ]
-        if user_data is not None:
-            policies.append(Policy.Userdata(user_data))
-        return Qos(*policies)
+        return endpoint_qos(
+            depth=self.depth, transient_local=self.transient_local, user_data=user_data
+        )
 
 
 SERVICES_QOS = EndpointQos(10)
@@ -119,24 +106,19 @@ class Ros2Node:
         self.config = config if config is not None else loopback_config(domain_id)
         self.name = name
         self._loop: asyncio.AbstractEventLoop | None = None
-        self._participant: Any = None
-        self._waitset: Any = None
-        self._guard: Any = None
+        self._dds = DdsParticipant(self.domain_id, self.config, f"ros2-node-{name}")
         self._topics: dict[str, Any] = {}
         self._readers: list[_Reader] = []
         self._writers: list[Any] = []
         self._lock = threading.Lock()
-        self._thread: threading.Thread | None = None
-        self._stopping = False
-        self._domain_held = False
         self.dropped = 0
         """Samples that could not be read (a peer's malformed data)."""
 
     @property
     def participant(self) -> Any:
-        if self._participant is None:
+        if self._dds.participant is None:
             raise HubError(f"ROS 2 node {self.name}: start it first")
-        return self._participant
+        return self._dds.participant
 
     @property
     def loop(self) -> asyncio.AbstractEventLoop:
@@ -145,53 +127,30 @@ class Ros2Node:
         return self._loop
 
     async def start(self) -> None:
-        if self._thread is not None:
+        if self._dds.running:
             return
         self._loop = asyncio.get_running_loop()
         try:
-            _SharedDomain.acquire(self.domain_id, self.config)
-            self._domain_held = True
-            self._participant = DomainParticipant(self.domain_id)
-            self._waitset = WaitSet(self._participant)
-            self._guard = GuardCondition(self._participant)
-            self._waitset.attach(self._guard)
-        except DDSException as exc:
-            self._teardown()
-            raise HubError(f"ROS 2 node {self.name}: cannot join DDS domain: {exc}") from exc
+            self._dds.open()
         except BaseException:
             self._teardown()
             raise
-        self._thread = threading.Thread(
-            target=self._read_loop, name=f"ros2-node-{self.name}", daemon=True
-        )
-        self._thread.start()
+        self._dds.start(self._poll)
 
     async def close(self) -> None:
         self._teardown()
 
     def _teardown(self) -> None:
-        self._stopping = True
-        thread, self._thread = self._thread, None
-        if thread is not None:
-            self._guard.set(True)
-            thread.join(timeout=5.0)
         with self._lock:
             entities: list[Any] = []
             for r in self._readers:
                 entities += [r.condition, r.reader]
             entities += self._writers
             entities += list(self._topics.values())
-            entities += [self._guard, self._waitset, self._participant]
             self._readers.clear()
             self._writers.clear()
             self._topics.clear()
-        for entity in entities:
-            if entity is not None:
-                entity.__del__()  # now, not whenever the garbage collector gets to it
-        self._guard = self._waitset = self._participant = None
-        if self._domain_held:
-            self._domain_held = False
-            _SharedDomain.release(self.domain_id)
+        self._dds.close(entities)
 
     # -- endpoints ---------------------------------------------------------------------
     def topic(self, name: str, idl_type: type[Any]) -> Any:
@@ -235,7 +194,7 @@ class Ros2Node:
             raise HubError(f"{name}: cannot create DDS reader: {exc}") from exc
         with self._lock:
             self._readers.append(_Reader(name, reader, condition, callback))
-            self._waitset.attach(condition)
+            self._dds.attach(condition)
         return reader
 
     def remove(self, *entities: Any) -> None:
@@ -244,27 +203,18 @@ class Ros2Node:
             for entity in entities:
                 for r in [r for r in self._readers if r.reader is entity]:
                     self._readers.remove(r)
-                    self._waitset.detach(r.condition)
+                    self._dds.detach(r.condition)
                     r.condition.__del__()
                 if entity in self._writers:
                     self._writers.remove(entity)
                 entity.__del__()
 
     # -- receiving ---------------------------------------------------------------------
-    def _read_loop(self) -> None:
-        try:
-            while not self._stopping:
-                self._waitset.wait(_WAIT_NS)
-                if self._stopping:
-                    break
-                with self._lock:
-                    readers = list(self._readers)
-                for r in readers:
-                    self._take(r)
-        except RuntimeError:  # the loop closed: nobody left to deliver to
-            return
-        except Exception:  # pragma: no cover - a DDS failure must not die silently
-            log.exception("ROS 2 node %s: DDS reader thread failed", self.name)
+    def _poll(self) -> None:
+        with self._lock:
+            readers = list(self._readers)
+        for r in readers:
+            self._take(r)
 
     def _take(self, r: _Reader) -> None:
         loop = self.loop

@@ -27,8 +27,8 @@ from cyclonedds.util import duration
 
 from plansys_bridge.bridge.bridge import Bridge
 from plansys_bridge.bridge.config import parse_bridge_config
-from plansys_bridge.hub.dds import _SharedDomain
 from plansys_bridge.hub.dds_config import loopback_config
+from plansys_bridge.hub.dds_participant import SharedDomain
 from plansys_bridge.ros1.roscore import Roscore
 
 DOMAIN = 77
@@ -121,9 +121,9 @@ QOS = Qos(
 @pytest.fixture(autouse=True)
 def _loopback_domain() -> Any:
     """The test's DDS peer joins the domain with the loopback config the bridge uses."""
-    _SharedDomain.acquire(DOMAIN, loopback_config(DOMAIN))
+    SharedDomain.acquire(DOMAIN, loopback_config(DOMAIN))
     yield
-    _SharedDomain.release(DOMAIN)
+    SharedDomain.release(DOMAIN)
 
 
 def config(core: Roscore, topics: list[dict[str, Any]]) -> Any:

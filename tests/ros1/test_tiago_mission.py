@@ -39,12 +39,12 @@ def test_tiago_mission_drives_move_base_and_bridges_odom(roscore: Roscore) -> No
     from cyclonedds.topic import Topic
     from cyclonedds.util import duration
 
-    from plansys_bridge.hub.dds import _SharedDomain
     from plansys_bridge.hub.dds_config import loopback_config
+    from plansys_bridge.hub.dds_participant import SharedDomain
     from plansys_bridge.interfaces.dds import dds_type
 
     domain_id = 78
-    _SharedDomain.acquire(domain_id, loopback_config(domain_id))  # the config the bridge uses
+    SharedDomain.acquire(domain_id, loopback_config(domain_id))  # the config the bridge uses
     double = subprocess.Popen(
         [sys.executable, "-m", "plansys_bridge_adapters.ros1.double", "--speed", "4"],
         env=roscore.env() | {"PYTHONPATH": os.environ.get("PYTHONPATH", "")},
@@ -71,7 +71,7 @@ def test_tiago_mission_drives_move_base_and_bridges_odom(roscore: Roscore) -> No
     finally:
         double.terminate()
         double.wait(timeout=20)
-        _SharedDomain.release(domain_id)
+        SharedDomain.release(domain_id)
     assert report.success, report.summary()
     result = report.result
     assert result is not None

@@ -16,8 +16,8 @@ from cyclonedds.idl import IdlStruct
 from cyclonedds.idl.types import int64, uint64
 from ros2_upstream import Empty_, RawClient
 
-from plansys_bridge.hub.dds import _SharedDomain
 from plansys_bridge.hub.dds_config import loopback_config
+from plansys_bridge.hub.dds_participant import SharedDomain
 
 pytestmark = pytest.mark.timeout(90)
 
@@ -53,7 +53,7 @@ def test_serve_answers_get_domain_name() -> None:
         stderr=subprocess.STDOUT,
         text=True,
     )
-    _SharedDomain.acquire(domain, loopback_config(domain))
+    SharedDomain.acquire(domain, loopback_config(domain))
     dp = DomainParticipant(domain)
     try:
         client = RawClient(
@@ -63,7 +63,7 @@ def test_serve_answers_get_domain_name() -> None:
         assert reply.success and reply.name == "cooking"
     finally:
         dp.__del__()
-        _SharedDomain.release(domain)
+        SharedDomain.release(domain)
         server.terminate()
         out, _ = server.communicate(timeout=20)
     assert "serving" in out and "/execute_plan" in out
