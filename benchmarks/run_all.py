@@ -43,6 +43,12 @@ BENCHES = (
         "whole-process CPU time of `--help` of the tool and each command vs `python -c pass`",
     ),
     Bench(
+        "cli_process",
+        "bench_cli_process.py",
+        ("--runs", "3"),
+        "`validate` and `plan` as whole processes vs the `pddl` library and `kairos solve`",
+    ),
+    Bench(
         "auction_scale",
         "bench_auction_scale.py",
         ("--auctions", "10", "--repeat", "2"),
