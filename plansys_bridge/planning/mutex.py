@@ -23,24 +23,25 @@ from plansys_bridge.knowledge.plan_atoms import AtomWalker
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import (
     NO_EFFECT,
+    TRUE,
     AddEffect,
     And,
     AndEffect,
     Atom,
-    BinaryOp,
     Compare,
     Condition,
     DeleteEffect,
     Effect,
     Equals,
     FluentRef,
-    Negate,
+    ForallEffect,
     Not,
     NumericEffect,
     NumExpr,
     WhenEffect,
     is_variable,
 )
+from plansys_bridge.pddl.walkers import Collector, Visitor, iter_nodes
 
 __all__ = ["Footprint", "Footprints"]
 
@@ -89,12 +90,15 @@ class Footprint:
 class _Template:
     """A plain action's footprint with its parameters still in place."""
 
-    reads: tuple[tuple[str, Args], ...]
+    positive: tuple[tuple[str, Args], ...]
+    negative: tuple[tuple[str, Args], ...]
     adds: tuple[tuple[str, Args], ...]
     deletes: tuple[tuple[str, Args], ...]
     fluent_reads: tuple[tuple[str, Args], ...]
     writes: tuple[tuple[str, Args, str], ...]
     """(fluent, arguments, operation) of each numeric effect."""
+    literals: bool
+    """The condition is a conjunction of literals only: its truth is a set lookup."""
 
     def ground(self, b: Mapping[str, str]) -> Footprint:
         def sub(args: Args) -> Args:
@@ -104,7 +108,7 @@ class _Template:
         written = {key for key, _op in writes}
         other = {key for key, op in writes if op not in ("increase", "decrease")}
         return Footprint(
-            {Atom(p, sub(a)) for p, a in self.reads},
+            {Atom(p, sub(a)) for p, a in self.positive + self.negative},
             {Atom(p, sub(a)) for p, a in self.adds},
             {Atom(p, sub(a)) for p, a in self.deletes},
             {(f, sub(a)) for f, a in self.fluent_reads},
@@ -113,56 +117,77 @@ class _Template:
         )
 
 
-class _Collector:
-    """Gathers a template; ``plain`` turns False at anything that needs a state."""
+class _Collect(Visitor[None]):
+    """Gathers a template; ``plain`` turns False at anything whose atoms depend on the
+    state (disjunctions, quantifiers, derived predicates, conditional effects)."""
+
+    kinds = ("condition", "effect")
 
     def __init__(self, derived: set[str]) -> None:
         self.derived = derived
         self.plain = True
-        self.reads: list[tuple[str, Args]] = []
+        self.literals = True
+        self.positive: list[tuple[str, Args]] = []
+        self.negative: list[tuple[str, Args]] = []
         self.adds: list[tuple[str, Args]] = []
         self.deletes: list[tuple[str, Args]] = []
         self.fluent_reads: list[tuple[str, Args]] = []
         self.writes: list[tuple[str, Args, str]] = []
 
-    def condition(self, cond: Condition) -> None:
-        if isinstance(cond, Atom):
-            if cond.predicate in self.derived:
-                self.plain = False
-            self.reads.append((cond.predicate, cond.args))
-        elif isinstance(cond, Not):
-            self.condition(cond.operand)
-        elif isinstance(cond, And):
-            for part in cond.operands:
-                self.condition(part)
-        elif isinstance(cond, Compare):
-            self.fluent_reads += _fluent_refs(cond.left) + _fluent_refs(cond.right)
-        elif not isinstance(cond, Equals):
-            self.plain = False  # Or, Imply, Exists, Forall
+    def walk_atom(self, node: Atom, positive: bool = True) -> None:
+        if node.predicate in self.derived:
+            self.plain = False
+        (self.positive if positive else self.negative).append((node.predicate, node.args))
 
-    def effect(self, eff: Effect) -> None:
-        if isinstance(eff, AndEffect):
-            for part in eff.effects:
-                self.effect(part)
-        elif isinstance(eff, AddEffect):
-            self.adds.append((eff.atom.predicate, eff.atom.args))
-        elif isinstance(eff, DeleteEffect):
-            self.deletes.append((eff.atom.predicate, eff.atom.args))
-        elif isinstance(eff, NumericEffect):
-            self.fluent_reads += _fluent_refs(eff.value)
-            self.writes.append((eff.fluent.name, eff.fluent.args, eff.op))
-        else:
-            self.plain = False  # WhenEffect, ForallEffect
+    def walk_not(self, node: Not, positive: bool = True) -> None:
+        if not isinstance(node.operand, Atom):
+            self.literals = False
+        self.walk(node.operand, not positive)
+
+    def walk_and(self, node: And, positive: bool = True) -> None:
+        if not positive:
+            self.literals = False  # a negated conjunction is a disjunction
+        for part in node.operands:
+            self.walk(part, positive)
+
+    def walk_compare(self, node: Compare, positive: bool = True) -> None:
+        self.literals = False
+        self.fluent_reads += _fluent_refs(node.left) + _fluent_refs(node.right)
+
+    def walk_equals(self, node: Equals, positive: bool = True) -> None:
+        self.literals = False
+
+    def _state_dependent(self, node: object, positive: bool = True) -> None:
+        self.plain = False
+
+    walk_or = walk_exists = walk_forall = _state_dependent
+    walk_when_effect = walk_forall_effect = _state_dependent
+
+    def walk_and_effect(self, node: AndEffect, positive: bool = True) -> None:
+        for part in node.effects:
+            self.walk(part)
+
+    def walk_add_effect(self, node: AddEffect, positive: bool = True) -> None:
+        self.adds.append((node.atom.predicate, node.atom.args))
+
+    def walk_delete_effect(self, node: DeleteEffect, positive: bool = True) -> None:
+        self.deletes.append((node.atom.predicate, node.atom.args))
+
+    def walk_numeric_effect(self, node: NumericEffect, positive: bool = True) -> None:
+        self.fluent_reads += _fluent_refs(node.value)
+        self.writes.append((node.fluent.name, node.fluent.args, node.op))
 
     def template(self) -> _Template | None:
         if not self.plain:
             return None
         return _Template(
-            tuple(self.reads),
+            tuple(self.positive),
+            tuple(self.negative),
             tuple(self.adds),
             tuple(self.deletes),
             tuple(self.fluent_reads),
             tuple(self.writes),
+            self.literals,
         )
 
 
@@ -193,12 +218,37 @@ class Footprints:
         footprint = template.ground(bindings)
         return footprint.reads, footprint.fluent_reads
 
+    def holds(self, condition: Condition, bindings: Mapping[str, str], state: State) -> bool:
+        """True when ``condition`` is a conjunction of literals that holds in ``state``
+        (looked up directly); False when it fails or needs the evaluator."""
+        template = self._template(condition, NO_EFFECT)
+        if template is None or not template.literals:
+            return False
+        b = bindings
+        return all(
+            state.has(p, tuple(b.get(x, x) for x in a)) for p, a in template.positive
+        ) and not any(state.has(p, tuple(b.get(x, x) for x in a)) for p, a in template.negative)
+
+    def changes(
+        self, effect: Effect, bindings: Mapping[str, str]
+    ) -> tuple[list[Atom], list[Atom]] | None:
+        """(adds, deletes) of an effect of plain adds and deletes; None for anything
+        else (numeric, conditional, quantified: the evaluator's work)."""
+        template = self._template(TRUE, effect)
+        if template is None or template.writes:
+            return None
+        b = bindings
+        return (
+            [Atom(p, tuple(b.get(x, x) for x in a)) for p, a in template.adds],
+            [Atom(p, tuple(b.get(x, x) for x in a)) for p, a in template.deletes],
+        )
+
     def _template(self, condition: Condition, effect: Effect) -> _Template | None:
         key = (id(condition), id(effect))
         if key not in self._templates:
-            collector = _Collector(self._derived)
-            collector.condition(condition)
-            collector.effect(effect)
+            collector = _Collect(self._derived)
+            collector.walk(condition)
+            collector.walk(effect)
             self._templates[key] = collector.template()
         return self._templates[key]
 
@@ -219,47 +269,57 @@ class Footprints:
         )
 
 
-def _numeric_accesses(
-    ev: Evaluator, effect: Effect, bindings: Mapping[str, str], state: State
-) -> tuple[set[FluentKey], set[FluentKey]]:
+class _NumericAccesses(Collector):
     """Fluents an effect reads (values on the right of numeric effects, conditions of
     ``when`` parts) and those it changes only additively (``increase``/``decrease``
     and no other kind of assignment). ``forall`` bodies with free variables are left
     to the mutex check on what they write, which then counts as not additive."""
-    reads: set[FluentKey] = set()
-    additive: set[FluentKey] = set()
-    other: set[FluentKey] = set()
 
-    def ground(args: Args) -> Args | None:
-        out = tuple(bindings.get(a, a) for a in args)
+    kinds = ("effect",)
+
+    def __init__(self, ev: Evaluator, bindings: Mapping[str, str], state: State) -> None:
+        self.ev = ev
+        self.bindings = bindings
+        self.state = state
+        self.reads: set[FluentKey] = set()
+        self.additive: set[FluentKey] = set()
+        self.other: set[FluentKey] = set()
+
+    def _ground(self, args: Args) -> Args | None:
+        out = tuple(self.bindings.get(a, a) for a in args)
         return None if any(is_variable(a) for a in out) else out
 
-    def visit(eff: Effect) -> None:
-        if isinstance(eff, AndEffect):
-            for sub in eff.effects:
-                visit(sub)
-        elif isinstance(eff, WhenEffect):
-            reads.update(ev.condition_fluents(eff.condition, bindings, state))
-            visit(eff.effect)
-        elif isinstance(eff, NumericEffect):
-            for name, args in _fluent_refs(eff.value):
-                grounded = ground(args)
-                if grounded is not None:
-                    reads.add((name, grounded))
-            target = ground(eff.fluent.args)
-            if target is not None:
-                key = (eff.fluent.name, target)
-                (additive if eff.op in ("increase", "decrease") else other).add(key)
+    def walk_when_effect(self, node: WhenEffect) -> None:
+        self.reads.update(self.ev.condition_fluents(node.condition, self.bindings, self.state))
+        self.walk(node.effect)
 
-    visit(effect)
-    return reads, additive - other
+    def walk_forall_effect(self, node: ForallEffect) -> None:
+        return None
+
+    def walk_add_effect(self, node: AddEffect) -> None:
+        return None
+
+    walk_delete_effect = walk_add_effect
+
+    def walk_numeric_effect(self, node: NumericEffect) -> None:
+        for name, args in _fluent_refs(node.value):
+            grounded = self._ground(args)
+            if grounded is not None:
+                self.reads.add((name, grounded))
+        target = self._ground(node.fluent.args)
+        if target is not None:
+            key = (node.fluent.name, target)
+            (self.additive if node.op in ("increase", "decrease") else self.other).add(key)
+
+
+def _numeric_accesses(
+    ev: Evaluator, effect: Effect, bindings: Mapping[str, str], state: State
+) -> tuple[set[FluentKey], set[FluentKey]]:
+    """(fluents read, fluents changed only additively): see :class:`_NumericAccesses`."""
+    walker = _NumericAccesses(ev, bindings, state)
+    walker.walk(effect)
+    return walker.reads, walker.additive - walker.other
 
 
 def _fluent_refs(expr: NumExpr) -> list[tuple[str, Args]]:
-    if isinstance(expr, FluentRef):
-        return [(expr.name, expr.args)]
-    if isinstance(expr, BinaryOp):
-        return _fluent_refs(expr.left) + _fluent_refs(expr.right)
-    if isinstance(expr, Negate):
-        return _fluent_refs(expr.operand)
-    return []
+    return [(n.name, n.args) for n in iter_nodes(expr) if isinstance(n, FluentRef)]

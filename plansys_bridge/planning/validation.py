@@ -244,8 +244,13 @@ class _Validator:
         self._check_separation(now, prints, recent)
         changed: set[object] = set()
         for h in group:
+            quick = self.footprints.changes(h.effect, h.bindings)
             try:
-                adds, deletes, values = self.ev.changes(h.effect, state, h.bindings, h.duration)
+                adds, deletes, values = (
+                    (*quick, {})
+                    if quick is not None
+                    else self.ev.changes(h.effect, state, h.bindings, h.duration)
+                )
             except PlansysBridgeError as exc:
                 raise self.fail(
                     h.index, f"{h.point} effect cannot be applied: {exc}", None, now
@@ -361,6 +366,8 @@ class _Validator:
         state: State,
         time: float | None = None,
     ) -> None:
+        if self.footprints.holds(cond, h.bindings, state):
+            return  # a conjunction of literals, looked up directly
         try:
             if self.ev.holds(cond, state, h.bindings, h.duration):
                 return
