@@ -69,7 +69,7 @@ BENCHES = (
     Bench(
         "validation_share",
         "bench_validation_share.py",
-        ("--repeat", "3"),
+        ("--repeat", "10"),
         "validate_plan's share of knowledge -> plan",
     ),
     Bench(
