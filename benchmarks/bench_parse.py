@@ -12,7 +12,9 @@ parser objects built once and reused (its fastest use). Files a peer cannot
 parse (most of the corpus is temporal PDDL, which ``pddl`` does not support) show
 the error class instead of a time and are left out of that peer's totals. For
 PDDLReader, empty ``(:functions )`` sections are removed before timing (it rejects
-them; PlanSys2's domains have many).
+them; PlanSys2's domains have many). The first two columns are our own pipeline
+with lark's contextual lexer and parse loop, and with lark's parse loop under our
+lexer: the figures the hand-written lexer and LALR driver are kept for.
 """
 
 from __future__ import annotations
@@ -26,11 +28,15 @@ import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
+from typing import Any
 
 from bench_support import FIXTURES
+from lark import Lark
 
 from plansys_bridge.errors import PddlError
+from plansys_bridge.pddl import parser as pddl_parser
 from plansys_bridge.pddl.model import Domain
 from plansys_bridge.pddl.parser import parse_domain, parse_problem
 
@@ -118,6 +124,39 @@ def _ours(domain_text: str, problem_text: str | None) -> object:
     return parse_problem(problem_text, domain, "problem.pddl")
 
 
+_lark_parsers: dict[str, Any] = {}
+
+
+def _ours_with(which: str) -> Runner:
+    """Our whole pipeline (same grammar, builder and checks) with lark doing more of
+    the work: ``lark`` is lark's own contextual lexer and parse loop, ``loop`` our
+    lexer under lark's parse loop. Shows what the hand-written lexer
+    (pddl/lexer.py) and LALR driver (pddl/driver.py) are worth."""
+
+    def run(domain_text: str, problem_text: str | None) -> object:
+        if which not in _lark_parsers:
+            if which == "lark":
+                grammar = resources.files("plansys_bridge.pddl").joinpath("grammar.lark")
+                _lark_parsers[which] = Lark(
+                    grammar.read_text("utf-8"),
+                    parser="lalr",
+                    lexer="contextual",
+                    start=list(pddl_parser._STARTS),
+                    transformer=pddl_parser._builder,
+                    maybe_placeholders=False,
+                )
+            else:
+                _lark_parsers[which] = pddl_parser._parser()
+        saved = pddl_parser._get_driver()
+        pddl_parser._driver = _lark_parsers[which]
+        try:
+            return _ours(domain_text, problem_text)
+        finally:
+            pddl_parser._driver = saved
+
+    return run
+
+
 def _pddl_public(domain_text: str, problem_text: str | None) -> object:
     import pddl
 
@@ -168,6 +207,8 @@ def _same(text: str | None) -> str | None:
 
 
 PEERS: list[tuple[str, Runner, Callable[[str | None], str | None]]] = [
+    ("ours, lark's lexer and loop", _ours_with("lark"), _same),
+    ("ours, lark's parse loop", _ours_with("loop"), _same),
     ("pddl (reused parser)", _pddl_reused, _same),
     ("pddl (parse_domain/problem)", _pddl_public, _same),
     ("unified-planning PDDLReader", _up, _up_friendly),

@@ -9,7 +9,6 @@ A byte order mark, which some Windows editors write, is not part of the text.
 
 from __future__ import annotations
 
-import codecs
 from pathlib import Path
 
 from plansys_bridge.errors import PlansysBridgeError, SourceLocation
@@ -40,10 +39,10 @@ def read_text(path: str | Path, what: str = "file") -> str:
         raise TextFileError(name, f"cannot read {what}: {exc.strerror or exc}") from exc
     except ValueError as exc:  # "embedded null byte": no file system allows one in a name
         raise TextFileError(repr(name), f"cannot read {what}: a NUL byte in its name") from exc
-    data = data.removeprefix(codecs.BOM_UTF8)  # Windows editors start files with one
     try:
-        return data.decode("utf-8")
+        return data.decode("utf-8-sig")  # the codec drops a byte order mark, if any
     except UnicodeDecodeError as exc:
+        data = exc.object  # the bytes after the mark: offsets below count from there
         line_start = data.rfind(b"\n", 0, exc.start) + 1
         line = data.count(b"\n", 0, exc.start) + 1
         column = len(data[line_start : exc.start].decode("utf-8", "replace")) + 1

@@ -28,7 +28,29 @@ LAYERS = (
     "mission",
     "cli",
 )
-"""Lowest first; ``mission_config`` belongs to the mission layer."""
+"""Lowest first."""
+
+PLACES = {
+    "": "errors",  # the package's own __init__
+    "textfile": "errors",
+    "retry": "clock",
+    "plugins": "clock",
+    "interfaces": "clock",  # message definitions and typestores the hub speaks
+    "ros1": "clock",  # the ROS 1 wire protocol, no project types
+    "testing": "performers",  # the shared suite every performer plugin passes
+    "mission_config": "mission",
+    "monitoring": "mission",
+    "report": "mission",
+    "learning": "mission",
+    "bridge": "mission",
+    "ros2": "mission",
+    "sensing": "mission",
+    "experiments": "mission",
+    "scaffold": "mission",
+    "terminal": "cli",
+    "__main__": "cli",
+}
+"""Where each top-level module that is not a layer of its own sits."""
 
 KNOWN_CYCLES = {
     frozenset({"plansys_bridge.bridge.config", "plansys_bridge.mission_config"}),
@@ -77,15 +99,24 @@ def _graph() -> nx.DiGraph:
     return graph
 
 
+def _top(module: str) -> str:
+    return module.split(".")[1] if "." in module else ""
+
+
 def _layer(module: str) -> int | None:
-    top = module.split(".")[1] if "." in module else ""
-    top = "mission" if top == "mission_config" else top
+    top = _top(module)
+    top = PLACES.get(top, top)
     return LAYERS.index(top) if top in LAYERS else None
 
 
 def test_no_new_import_cycle() -> None:
     cycles = {frozenset(c) for c in nx.simple_cycles(_graph())}
     assert cycles <= KNOWN_CYCLES, sorted(sorted(c) for c in cycles - KNOWN_CYCLES)
+
+
+def test_every_top_level_module_has_a_layer() -> None:
+    unplaced = sorted({_top(m) for m in _modules() if _layer(m) is None})
+    assert unplaced == [], f"add these to LAYERS or PLACES: {unplaced}"
 
 
 def test_layers_import_only_downwards() -> None:

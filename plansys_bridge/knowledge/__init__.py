@@ -23,7 +23,7 @@ _EXPORTS = {
     "GroundAction": "grounding",
     "DomainExpert": "domain_expert",
     "ProblemExpert": "problem_expert",
-    "KnowledgeChange": "problem_expert",
+    "KnowledgeChange": "changes",
 }
 
 __all__ = sorted(_EXPORTS)

@@ -9,7 +9,9 @@ knowledge base holds can then always be written, published and evaluated.
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from typing import Any
 
 from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.pddl.model import (
@@ -19,19 +21,13 @@ from plansys_bridge.pddl.model import (
     Compare,
     Condition,
     DurationRef,
-    Equals,
-    Exists,
     FluentRef,
     FluentValue,
-    Forall,
-    Imply,
-    Negate,
-    Not,
     Number,
-    NumExpr,
     Or,
     TypedName,
 )
+from plansys_bridge.pddl.walkers import NODE_KINDS, Walker, children, terms
 
 __all__ = ["check_atom", "check_condition", "check_fluent_value", "check_text", "number"]
 
@@ -78,59 +74,79 @@ def check_fluent_value(fv: FluentValue, what: str = "function") -> FluentValue:
 
 def check_condition(cond: object, what: str = "goal") -> Condition:
     """A condition tree built only of condition and expression nodes with valid leaves."""
-    stack: list[object] = [cond]
-    while stack:
-        node = stack.pop()
-        if isinstance(node, Atom):
-            check_atom(node, what)
-        elif isinstance(node, And | Or):
-            if not isinstance(node.operands, tuple):
-                raise KnowledgeError(f"{what}: operands must be a tuple of conditions")
-            stack.extend(node.operands)
-        elif isinstance(node, Not):
-            stack.append(node.operand)
-        elif isinstance(node, Imply):
-            stack += [node.antecedent, node.consequent]
-        elif isinstance(node, Exists | Forall):
-            for var in node.variables:
-                if not isinstance(var, TypedName):
-                    raise KnowledgeError(f"{what}: quantified variables must be TypedNames")
-                check_text(var.name, f"{what} variable")
-            stack.append(node.body)
-        elif isinstance(node, Equals):
-            check_text(node.left, f"{what} term")
-            check_text(node.right, f"{what} term")
-        elif isinstance(node, Compare):
-            if node.op not in _COMPARE_OPS:
-                raise KnowledgeError(f"{what}: unknown comparison {_short(node.op)}")
-            _check_expr(node.left, what)
-            _check_expr(node.right, what)
-        else:
-            raise KnowledgeError(f"{what}: {type(node).__name__} {_short(node)} is not a condition")
-    return cond  # type: ignore[return-value]  # checked node by node above
+    _SHAPE.walk(cond, what, "condition")
+    return cond  # type: ignore[return-value]  # checked node by node
 
 
-def _check_expr(expr: NumExpr, what: str) -> None:
-    stack: list[object] = [expr]
-    while stack:
-        node = stack.pop()
-        if isinstance(node, Number):
-            number(node.value, what)
-        elif isinstance(node, FluentRef):
-            _check_fluent_ref(node, what)
-        elif isinstance(node, BinaryOp):
-            if node.op not in _BINARY_OPS:
-                raise KnowledgeError(f"{what}: unknown operator {_short(node.op)}")
-            stack += [node.left, node.right]
-        elif isinstance(node, Negate):
-            stack.append(node.operand)
-        elif isinstance(node, DurationRef):
-            raise KnowledgeError(f"{what}: ?duration is only meaningful inside an action")
-        else:
+_WRONG_KIND = {
+    "condition": "is not a condition",
+    "expression": "is not a numeric expression (numbers are Number(value))",
+}
+
+
+class _Shape(Walker[None]):
+    """Checks a node handed in from Python is a model node of the kind its place
+    needs (``walk(node, what, kind)``), then its leaves and children. A construct
+    without a method here (one with a ``lower()``) has its terms, variables and
+    children checked generically."""
+
+    kinds = ("condition", "expression")
+
+    def walk(self, node: Any, *args: Any) -> None:
+        what, kind = args
+        if type(node) not in NODE_KINDS[kind] and not (
+            kind == "condition" and dataclasses.is_dataclass(node) and hasattr(node, "lower")
+        ):
             raise KnowledgeError(
-                f"{what}: {type(node).__name__} {_short(node)} is not a numeric expression "
-                "(numbers are Number(value))"
+                f"{what}: {type(node).__name__} {_short(node)} {_WRONG_KIND[kind]}"
             )
+        super().walk(node, what, kind)
+
+    def default(self, node: Any, what: str, kind: str) -> None:
+        for term in terms(node):
+            check_text(term, f"{what} term")
+        for var in getattr(node, "variables", ()):
+            if not isinstance(var, TypedName):
+                raise KnowledgeError(f"{what}: quantified variables must be TypedNames")
+            check_text(var.name, f"{what} variable")
+        for child in children(node):
+            child_kind = "expression" if type(child) in NODE_KINDS["expression"] else kind
+            self.walk(child, what, child_kind)
+
+    def walk_atom(self, node: Atom, what: str, kind: str) -> None:
+        check_atom(node, what)
+
+    def walk_and(self, node: And | Or, what: str, kind: str) -> None:
+        if not isinstance(node.operands, tuple):
+            raise KnowledgeError(f"{what}: operands must be a tuple of conditions")
+        for operand in node.operands:
+            self.walk(operand, what, "condition")
+
+    walk_or = walk_and
+
+    def walk_compare(self, node: Compare, what: str, kind: str) -> None:
+        if node.op not in _COMPARE_OPS:
+            raise KnowledgeError(f"{what}: unknown comparison {_short(node.op)}")
+        self.walk(node.left, what, "expression")
+        self.walk(node.right, what, "expression")
+
+    def walk_number(self, node: Number, what: str, kind: str) -> None:
+        number(node.value, what)
+
+    def walk_fluent_ref(self, node: FluentRef, what: str, kind: str) -> None:
+        _check_fluent_ref(node, what)
+
+    def walk_binary_op(self, node: BinaryOp, what: str, kind: str) -> None:
+        if node.op not in _BINARY_OPS:
+            raise KnowledgeError(f"{what}: unknown operator {_short(node.op)}")
+        self.walk(node.left, what, "expression")
+        self.walk(node.right, what, "expression")
+
+    def walk_duration_ref(self, node: DurationRef, what: str, kind: str) -> None:
+        raise KnowledgeError(f"{what}: ?duration is only meaningful inside an action")
+
+
+_SHAPE = _Shape()
 
 
 def _check_fluent_ref(ref: object, what: str) -> None:

@@ -7,11 +7,9 @@ Why it is built this way:
   change runs inside one guarded block that undoes it if anything fails,
   so bad input never leaves the knowledge half-changed.
 * Instances, facts and fluent values live in journaled tables that log what each
-  change touches: a failed change is undone from that log, and what changed is
-  computed from it (net of what came back), so a subscriber gets exactly one
-  :class:`KnowledgeChange` per change (or per transaction) saying precisely what
-  moved, however the change was made, at a cost in the size of the change rather
-  than of the knowledge.
+  change touches (:mod:`.changes`): a failed change is undone from that log, and a
+  subscriber gets exactly one :class:`KnowledgeChange` per change (or transaction).
+* What may be stored is checked in :mod:`.admission` before a change starts.
 * Facts live in a :class:`State` updated copy-on-write, so ``state()`` is free and
   the executor can keep old snapshots; insertion order is kept for listings.
 * One re-entrant lock: adapters and the executor call in from other threads.
@@ -19,85 +17,42 @@ Why it is built this way:
 
 from __future__ import annotations
 
-import logging
 import re
-import threading
-from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
-from dataclasses import dataclass, field
+from collections.abc import Mapping
 
 from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.hub.messages import Knowledge
+from plansys_bridge.knowledge.admission import Admission
+from plansys_bridge.knowledge.changes import ChangeTracker, KnowledgeChange
 from plansys_bridge.knowledge.domain_expert import DomainExpert
 from plansys_bridge.knowledge.evaluation import Evaluator
-from plansys_bridge.knowledge.formulas import fluent_text
 from plansys_bridge.knowledge.inputs import (
     check_atom,
     check_condition,
     check_fluent_value,
     check_text,
 )
-from plansys_bridge.knowledge.journal import JournaledTable
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import (
     TRUE,
-    And,
     Atom,
-    BinaryOp,
-    Compare,
     Condition,
     Domain,
-    DurationRef,
     Effect,
-    Equals,
-    Exists,
     FluentRef,
     FluentValue,
-    Forall,
-    Imply,
-    Negate,
-    Not,
-    NumExpr,
-    Or,
     Problem,
     TypedName,
 )
+from plansys_bridge.pddl.walkers import iter_nodes, terms
 
-log = logging.getLogger(__name__)
+__all__ = ["KnowledgeChange", "ProblemExpert"]
+
 
 _NAME = re.compile(r"^[a-z][a-z0-9_\-]*$")
 
 
-@dataclass(frozen=True)
-class KnowledgeChange:
-    """What one change (or one transaction) did to the knowledge."""
-
-    version: int
-    reason: str
-    added_instances: Mapping[str, str] = field(default_factory=dict)
-    removed_instances: Mapping[str, str] = field(default_factory=dict)
-    added_facts: frozenset[Atom] = frozenset()
-    removed_facts: frozenset[Atom] = frozenset()
-    changed_fluents: Mapping[FluentKey, float] = field(default_factory=dict)
-    removed_fluents: frozenset[FluentKey] = frozenset()
-    goal_changed: bool = False
-    goal: Condition | None = None
-    state: State | None = field(default=None, compare=False, repr=False)
-    """The snapshot right after the change (read it without taking the lock)."""
-
-
-@dataclass(frozen=True)
-class _Mark:
-    """Where a change started: log positions of the tables, the goal and the state."""
-
-    instances: int
-    facts: int
-    fluents: int
-    goal: Condition | None
-    state: State
-
-
-class ProblemExpert:
+class ProblemExpert(ChangeTracker):
     """The knowledge base of one domain (see module docs)."""
 
     def __init__(self, domain: Domain | DomainExpert) -> None:
@@ -106,250 +61,14 @@ class ProblemExpert:
         self.evaluator: Evaluator = self.domain_expert.evaluator
         self._types = self.domain_expert.types
         self._constants = self.domain_expert.constants
-        self._lock = threading.RLock()
-        self._instances: JournaledTable[str, str] = JournaledTable()
-        self._facts: JournaledTable[Atom, None] = JournaledTable()
-        self._fluents: JournaledTable[FluentKey, float] = JournaledTable()
-        self._goal: Condition | None = None
-        self._state = State(objects=self._constants)
-        self._subscribers: list[Callable[[KnowledgeChange], None]] = []
-        self._depth = 0
-        self.version = 0
-
-    # ================================================================ change machinery
-
-    def _mark(self) -> _Mark:
-        return _Mark(
-            self._instances.mark(),
-            self._facts.mark(),
-            self._fluents.mark(),
-            self._goal,
-            self._state,
-        )
-
-    def _undo(self, mark: _Mark) -> None:
-        self._instances.undo(mark.instances)
-        self._facts.undo(mark.facts)
-        self._fluents.undo(mark.fluents)
-        self._goal = mark.goal
-        self._state = mark.state
-
-    @contextmanager
-    def _change(self, reason: str, *, steps: bool = False) -> Iterator[None]:
-        """Run a change all-or-nothing; notify once when the outermost block ends.
-
-        Single operations validate everything before they touch anything, so inside
-        a transaction they need no undo point of their own; ``steps=True`` marks one
-        that mutates as it goes (a whole problem), which is then undone on its own
-        when it fails, even if the surrounding transaction carries on.
-        """
-        with self._lock:
-            if self._depth:
-                if not steps:
-                    yield
-                    return
-                inner = self._mark()
-                try:
-                    yield
-                except BaseException:
-                    self._undo(inner)
-                    raise
-                return
-            start = self._mark()
-            self._depth = 1
-            try:
-                yield
-            except BaseException:
-                self._undo(start)
-                raise
-            finally:
-                self._depth = 0
-            try:
-                change = self._change_since(start, reason)
-            finally:
-                for table in (self._instances, self._facts, self._fluents):
-                    table.forget_log()
-            if change is not None:
-                self._notify(change)
-
-    @contextmanager
-    def transaction(self) -> Iterator[ProblemExpert]:
-        """Several changes as one: all applied or none, one notification."""
-        with self._change("transaction", steps=True):
-            yield self
-
-    def _change_since(self, start: _Mark, reason: str) -> KnowledgeChange | None:
-        """What the tables' logs say moved since ``start``; None when nothing did."""
-        added, removed = self._facts.changes_since(start.facts)
-        changed_fluents, fluents_before = self._fluents.changes_since(start.fluents)
-        removed_fluents = frozenset(k for k in fluents_before if k not in self._fluents)
-        added_instances, removed_instances = self._instances.changes_since(start.instances)
-        goal_changed = start.goal != self._goal
-        if not (
-            added
-            or removed
-            or changed_fluents
-            or removed_fluents
-            or added_instances
-            or removed_instances
-            or goal_changed
-        ):
-            return None
-        self.version += 1
-        return KnowledgeChange(
-            version=self.version,
-            reason=reason,
-            added_instances=added_instances,
-            removed_instances=removed_instances,
-            added_facts=frozenset(added),
-            removed_facts=frozenset(removed),
-            changed_fluents=changed_fluents,
-            removed_fluents=removed_fluents,
-            goal_changed=goal_changed,
-            goal=self._goal,
-            state=self._state,
-        )
-
-    def _notify(self, change: KnowledgeChange) -> None:
-        for callback in list(self._subscribers):
-            try:
-                callback(change)
-            except Exception:  # a broken subscriber must not break the knowledge
-                log.exception("knowledge subscriber %r failed", callback)
-
-    def subscribe(self, callback: Callable[[KnowledgeChange], None]) -> Callable[[], None]:
-        """Call ``callback`` after every change; returns a function that unsubscribes."""
-        with self._lock:
-            self._subscribers.append(callback)
-
-        def unsubscribe() -> None:
-            with self._lock:
-                if callback in self._subscribers:
-                    self._subscribers.remove(callback)
-
-        return unsubscribe
+        super().__init__(self._constants)
+        self._admit = Admission(self.domain_expert, self._object_type)
 
     # ================================================================ validation
 
     def _object_type(self, name: str) -> str | None:
         found = self._instances.get(name)
         return found if found is not None else self._constants.get(name)
-
-    def _check_args(
-        self, what: str, text: str, params: tuple[TypedName, ...], args: tuple[str, ...]
-    ) -> None:
-        if len(args) != len(params):
-            raise KnowledgeError(f"{what} {text}: expects {len(params)} arguments, got {len(args)}")
-        for param, arg in zip(params, args, strict=True):
-            if arg.startswith("?"):
-                raise KnowledgeError(f"{what} {text}: {arg} is a variable, an object is needed")
-            obj_type = self._object_type(arg)
-            if obj_type is None:
-                raise KnowledgeError(f"{what} {text}: unknown object {arg!r}")
-            if not self._types.is_subtype_of_any((obj_type,), param.types):
-                raise KnowledgeError(
-                    f"{what} {text}: {arg} is a {obj_type}, parameter {param.name} "
-                    f"wants {' or '.join(param.types)}"
-                )
-
-    def _check_fact(self, atom: Atom) -> Atom:
-        atom = Atom(atom.predicate.lower(), tuple(a.lower() for a in atom.args))
-        pdef = self.domain_expert.get_predicate(atom.predicate)
-        if pdef is None:
-            raise KnowledgeError(f"predicate {atom}: unknown predicate {atom.predicate!r}")
-        if self.domain_expert.is_derived(atom.predicate):
-            raise KnowledgeError(
-                f"predicate {atom}: {atom.predicate} is derived; it follows from other facts"
-            )
-        self._check_args("predicate", str(atom), pdef.parameters, atom.args)
-        return atom
-
-    def _check_fluent(self, name: str, args: tuple[str, ...]) -> FluentKey:
-        key = (name.lower(), tuple(a.lower() for a in args))
-        text = fluent_text(key)
-        fdef = self.domain_expert.get_function(key[0])
-        if fdef is None:
-            raise KnowledgeError(f"function {text}: unknown function {key[0]!r}")
-        self._check_args("function", text, fdef.parameters, key[1])
-        return key
-
-    def _check_condition(self, cond: Condition, scope: dict[str, tuple[str, ...]]) -> None:
-        """Known predicates/functions, arity, objects and (for objects) types."""
-        if isinstance(cond, Atom):
-            pdef = self.domain_expert.get_predicate(cond.predicate)
-            if pdef is None:
-                raise KnowledgeError(f"condition {cond}: unknown predicate {cond.predicate!r}")
-            self._check_terms("condition", str(cond), pdef.parameters, cond.args, scope)
-        elif isinstance(cond, (And, Or)):
-            for c in cond.operands:
-                self._check_condition(c, scope)
-        elif isinstance(cond, Not):
-            self._check_condition(cond.operand, scope)
-        elif isinstance(cond, Imply):
-            self._check_condition(cond.antecedent, scope)
-            self._check_condition(cond.consequent, scope)
-        elif isinstance(cond, (Exists, Forall)):
-            inner = dict(scope)
-            for var in cond.variables:
-                for t in var.types:
-                    if not self.domain_expert.is_valid_type(t):
-                        raise KnowledgeError(
-                            f"condition: variable {var.name} has unknown type {t!r}"
-                        )
-                inner[var.name] = var.types
-            self._check_condition(cond.body, inner)
-        elif isinstance(cond, Equals):
-            for term in (cond.left, cond.right):
-                self._check_term_known("condition", f"(= {cond.left} {cond.right})", term, scope)
-        elif isinstance(cond, Compare):
-            self._check_expr(cond.left, scope)
-            self._check_expr(cond.right, scope)
-
-    def _check_expr(self, expr: NumExpr, scope: dict[str, tuple[str, ...]]) -> None:
-        if isinstance(expr, FluentRef):
-            text = fluent_text((expr.name, expr.args))
-            fdef = self.domain_expert.get_function(expr.name)
-            if fdef is None:
-                raise KnowledgeError(f"condition {text}: unknown function {expr.name!r}")
-            self._check_terms("condition", text, fdef.parameters, expr.args, scope)
-        elif isinstance(expr, BinaryOp):
-            self._check_expr(expr.left, scope)
-            self._check_expr(expr.right, scope)
-        elif isinstance(expr, Negate):
-            self._check_expr(expr.operand, scope)
-        elif isinstance(expr, DurationRef):
-            raise KnowledgeError("condition: ?duration is only meaningful inside an action")
-
-    def _check_term_known(
-        self, what: str, text: str, term: str, scope: dict[str, tuple[str, ...]]
-    ) -> None:
-        if term.startswith("?"):
-            if term not in scope:
-                raise KnowledgeError(f"{what} {text}: variable {term} is not bound")
-        elif self._object_type(term) is None:
-            raise KnowledgeError(f"{what} {text}: unknown object {term!r}")
-
-    def _check_terms(
-        self,
-        what: str,
-        text: str,
-        params: tuple[TypedName, ...],
-        args: tuple[str, ...],
-        scope: dict[str, tuple[str, ...]],
-    ) -> None:
-        if len(args) != len(params):
-            raise KnowledgeError(f"{what} {text}: expects {len(params)} arguments, got {len(args)}")
-        for param, arg in zip(params, args, strict=True):
-            self._check_term_known(what, text, arg, scope)
-            if arg.startswith("?"):
-                continue
-            obj_type = self._object_type(arg)
-            assert obj_type is not None
-            if not self._types.is_subtype_of_any((obj_type,), param.types):
-                raise KnowledgeError(
-                    f"{what} {text}: {arg} is a {obj_type}, parameter {param.name} "
-                    f"wants {' or '.join(param.types)}"
-                )
 
     # ================================================================ parsing helpers
 
@@ -453,7 +172,7 @@ class ProblemExpert:
     def add_predicate(self, fact: Atom | str) -> bool:
         """Add a ground fact; False when it was already there."""
         with self._change("add_predicate"):
-            atom = self._check_fact(self._atom(fact))
+            atom = self._admit.fact(self._atom(fact))
             if atom in self._facts:
                 return False
             self._facts.set(atom, None)
@@ -463,7 +182,7 @@ class ProblemExpert:
     def remove_predicate(self, fact: Atom | str) -> bool:
         """Remove a ground fact; False when it was not there."""
         with self._change("remove_predicate"):
-            atom = self._check_fact(self._atom(fact))
+            atom = self._admit.fact(self._atom(fact))
             if atom not in self._facts:
                 return False
             self._facts.delete(atom)
@@ -495,7 +214,7 @@ class ProblemExpert:
         """Give a fluent a value (added or updated); False when it already had it."""
         with self._change("set_function"):
             value = self._fluent_value(fv)
-            key = self._check_fluent(value.fluent.name, value.fluent.args)
+            key = self._admit.fluent(value.fluent.name, value.fluent.args)
             if self._fluents.get(key) == value.value:
                 return False
             self._fluents.set(key, float(value.value))
@@ -520,7 +239,7 @@ class ProblemExpert:
                 key = self._fluent_key(name.fluent.name, name.fluent.args)
             else:
                 key = self._fluent_key(name, args)
-            key = self._check_fluent(*key)
+            key = self._admit.fluent(*key)
             if key not in self._fluents:
                 return False
             self._fluents.delete(key)
@@ -551,7 +270,7 @@ class ProblemExpert:
         """Replace the goal (validated against the domain and the objects)."""
         with self._change("set_goal"):
             cond = self._condition(goal)
-            self._check_condition(cond, {})
+            self._admit.condition(cond, {})
             self._goal = cond
             return True
 
@@ -606,10 +325,10 @@ class ProblemExpert:
                     if not self.domain_expert.is_valid_type(typ):
                         raise KnowledgeError(f"instance {name}: unknown type {typ!r}")
                     self._put_instance(name, typ)
-                facts = [self._check_fact(check_atom(atom, "predicate")) for atom in problem.init]
+                facts = [self._admit.fact(check_atom(atom, "predicate")) for atom in problem.init]
                 values: dict[FluentKey, float] = {}
                 for fv in map(check_fluent_value, problem.init_fluents):
-                    values[self._check_fluent(fv.fluent.name, fv.fluent.args)] = float(fv.value)
+                    values[self._admit.fluent(fv.fluent.name, fv.fluent.args)] = float(fv.value)
                 for atom in facts:
                     self._facts.set(atom, None)
                 for key, number in values.items():
@@ -676,10 +395,10 @@ class ProblemExpert:
         """Apply an effect (PDDL semantics) as one validated, atomic change."""
         with self._change("apply"):
             adds, deletes, updates = self.evaluator.changes(effect, self._state, bindings, duration)
-            checked_adds = [self._check_fact(a) for a in adds]
-            checked_deletes = [self._check_fact(a) for a in deletes]
+            checked_adds = [self._admit.fact(a) for a in adds]
+            checked_deletes = [self._admit.fact(a) for a in deletes]
             for key in updates:
-                self._check_fluent(*key)
+                self._admit.fluent(*key)
             for atom in checked_deletes:
                 self._facts.discard(atom)
             for atom in checked_adds:
@@ -710,35 +429,4 @@ class ProblemExpert:
 
 def _condition_objects(cond: Condition) -> set[str]:
     """Object names (not variables) a condition mentions."""
-    out: set[str] = set()
-
-    def expr(e: NumExpr) -> None:
-        if isinstance(e, FluentRef):
-            out.update(a for a in e.args if not a.startswith("?"))
-        elif isinstance(e, BinaryOp):
-            expr(e.left)
-            expr(e.right)
-        elif isinstance(e, Negate):
-            expr(e.operand)
-
-    def walk(c: Condition) -> None:
-        if isinstance(c, Atom):
-            out.update(a for a in c.args if not a.startswith("?"))
-        elif isinstance(c, (And, Or)):
-            for o in c.operands:
-                walk(o)
-        elif isinstance(c, Not):
-            walk(c.operand)
-        elif isinstance(c, Imply):
-            walk(c.antecedent)
-            walk(c.consequent)
-        elif isinstance(c, (Exists, Forall)):
-            walk(c.body)
-        elif isinstance(c, Equals):
-            out.update(a for a in (c.left, c.right) if not a.startswith("?"))
-        elif isinstance(c, Compare):
-            expr(c.left)
-            expr(c.right)
-
-    walk(cond)
-    return out
+    return {t for node in iter_nodes(cond) for t in terms(node) if not t.startswith("?")}

@@ -73,6 +73,14 @@ def test_binary_domain_file_names_the_first_bad_byte(tmp_path: Path) -> None:
     assert str(info.value.location) == f"{path}:2:18"
 
 
+def test_a_byte_order_mark_moves_no_error_column(tmp_path: Path) -> None:
+    path = tmp_path / "d.pddl"
+    path.write_bytes(b"\xef\xbb\xbf(define (domain x) \x89)\n")
+    with pytest.raises(PddlSyntaxError, match=r"not UTF-8 text \(byte 0x89\)") as info:
+        parse_domain_files([path])
+    assert str(info.value.location) == f"{path}:1:20"
+
+
 def test_two_initial_values_for_one_fluent_are_an_error() -> None:
     domain = parse_domain(DOMAIN)
     text = _problem("(= (travel_time k h) 3) (= (travel_time k h) 4)")

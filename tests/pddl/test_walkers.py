@@ -11,9 +11,12 @@ from pathlib import Path
 
 import pytest
 
+from plansys_bridge.errors import KnowledgeError, PddlSemanticError
 from plansys_bridge.knowledge.formulas import free_vars, negate
 from plansys_bridge.knowledge.grounding import substitute_condition, substitute_effect
+from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.pddl import model
+from plansys_bridge.pddl.checks import check_condition
 from plansys_bridge.pddl.model import (
     And,
     AndEffect,
@@ -42,6 +45,7 @@ from plansys_bridge.pddl.walkers import (
 )
 from plansys_bridge.pddl.writer import write_condition
 from plansys_bridge.planning.capabilities import Capability, required_capabilities
+from plansys_bridge.ros2.trees import condition_tree, tree_text
 
 BASES = "plansys_bridge.pddl.walkers"
 PACKAGE = Path(__file__).resolve().parents[2] / "plansys_bridge"
@@ -123,10 +127,16 @@ def test_every_node_field_is_understood(node_type: type) -> None:
 def test_walkers_exist_in_every_module_that_walks() -> None:
     modules = {w.__module__ for w in _project_walkers()}
     for name in (
+        "plansys_bridge.knowledge.admission",
         "plansys_bridge.knowledge.formulas",
         "plansys_bridge.knowledge.grounding",
+        "plansys_bridge.knowledge.inputs",
+        "plansys_bridge.knowledge.plan_atoms",
+        "plansys_bridge.knowledge.reasoner",
+        "plansys_bridge.pddl.checks",
         "plansys_bridge.pddl.writer",
         "plansys_bridge.planning.capabilities",
+        "plansys_bridge.ros2.trees",
     ):
         assert name in modules
 
@@ -220,6 +230,34 @@ def test_a_new_construct_is_walked_without_edits() -> None:
     caps = required_capabilities(domain, problem)
     assert Capability.DISJUNCTIVE_PRECONDITIONS in caps
     assert Capability.EXISTENTIAL_PRECONDITIONS in caps
+
+
+def test_a_new_construct_is_checked_stored_evaluated_and_sent_unedited() -> None:
+    domain = parse_domain(
+        """(define (domain d) (:requirements :adl :typing) (:types thing)
+             (:predicates (p ?x - thing) (q ?x - thing)))"""
+    )
+    check_condition(Xor(Atom("p", ("?x",)), Atom("q", ("?x",))), domain, {"?x": ("thing",)}, {})  # type: ignore[arg-type]
+    with pytest.raises(PddlSemanticError, match="unknown predicate 'r'"):
+        check_condition(Xor(Atom("p", ("?x",)), Atom("r", ())), domain, {"?x": ("thing",)}, {})  # type: ignore[arg-type]
+    knowledge = ProblemExpert(domain)
+    knowledge.add_instance("a", "thing")
+    knowledge.add_instance("b", "thing")
+    knowledge.add_predicate("(p a)")
+    knowledge.add_predicate("(q b)")
+    goal = And(
+        (Xor(Atom("p", ("a",)), Atom("q", ("a",))), Xor(Atom("p", ("b",)), Atom("q", ("b",))))
+    )
+    assert knowledge.set_goal(goal)  # type: ignore[arg-type]
+    assert knowledge.is_goal_satisfied()
+    knowledge.add_predicate("(q a)")
+    assert not knowledge.is_goal_satisfied()
+    with pytest.raises(KnowledgeError, match="unknown object 'c'"):
+        knowledge.set_goal(Xor(Atom("p", ("c",)), Atom("q", ("a",))))  # type: ignore[arg-type]
+    pos, neg = knowledge.evaluator.condition_atoms(goal, {}, knowledge.state())  # type: ignore[arg-type]
+    assert Atom("p", ("a",)) in pos | neg
+    tree = condition_tree(Xor(Atom("p", ("a",)), Atom("q", ("a",))))  # type: ignore[arg-type]
+    assert tree_text(tree) == "(or (and (p a) (not (q a))) (and (not (p a)) (q a)))"
 
 
 # ---------------------------------------------------------------- helpers
