@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping, Sequence
 
 from plansys_bridge.errors import KnowledgeError
-from plansys_bridge.knowledge.context import EvaluationError, UndefinedFluentError
+from plansys_bridge.knowledge.context import EvalContext, EvaluationError, UndefinedFluentError
 from plansys_bridge.knowledge.formulas import fluent_text
 from plansys_bridge.knowledge.grounding import (
     GroundAction,
@@ -68,7 +68,7 @@ class Evaluator(Reasoner):
     ) -> bool:
         """True when ``cond`` holds in ``state`` with ``bindings`` (``?x`` -> object)."""
         b = normalize_bindings(bindings) if bindings else {}
-        return self._holds(cond, b, self._context(state, duration))
+        return self._holds(cond, b, EvalContext(self, state, duration))
 
     def value(
         self,
@@ -79,7 +79,7 @@ class Evaluator(Reasoner):
     ) -> float:
         """The value of a numeric expression; an undefined fluent raises naming it."""
         b = normalize_bindings(bindings) if bindings else {}
-        return self._value(expr, b, self._context(state, duration))
+        return self._value(expr, b, EvalContext(self, state, duration))
 
     def apply(
         self,
@@ -101,7 +101,7 @@ class Evaluator(Reasoner):
     ) -> tuple[list[Atom], list[Atom], dict[FluentKey, float]]:
         """What ``effect`` would do: (adds, deletes, new fluent values), nothing applied."""
         b = normalize_bindings(bindings) if bindings else {}
-        ctx = self._context(state, duration)
+        ctx = EvalContext(self, state, duration)
         gathered = Changes()
         self._collect(effect, b, ctx, gathered)
         updates: dict[FluentKey, float] = {}
@@ -136,7 +136,7 @@ class Evaluator(Reasoner):
     ) -> Iterator[dict[str, str]]:
         """Every binding of ``variables`` (objects of their types) making ``cond`` hold."""
         b = normalize_bindings(bindings) if bindings else {}
-        ctx = self._context(state, duration)
+        ctx = EvalContext(self, state, duration)
         var_types = {v.name: self._accepted(v.types) for v in variables}
         for v in var_types:
             b.pop(v, None)

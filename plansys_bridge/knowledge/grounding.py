@@ -14,14 +14,23 @@ from typing import Any
 
 from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.pddl.model import (
+    AddEffect,
     And,
+    AndEffect,
     AnyAction,
     Atom,
+    BinaryOp,
+    Compare,
     Condition,
+    DeleteEffect,
     DurationRef,
     Effect,
+    FluentRef,
+    Not,
     Number,
+    NumericEffect,
     NumExpr,
+    WhenEffect,
 )
 from plansys_bridge.pddl.walkers import Transformer, bound_variables
 
@@ -76,12 +85,45 @@ class _Substitute(Transformer):
             return _Substitute(inner).rebuild(node) if inner else node
         return self.rebuild(node)
 
-    # fast paths: every ground action's conditions go through these
+    # Fast paths: every ground action's conditions and effects go through these.
+    def walk(self, node: Any, *args: Any) -> Any:
+        fn = self._methods.get(node.__class__)
+        if fn is None:
+            fn = self.method_for(node.__class__)
+        return fn(self, node)
+
     def walk_atom(self, atom: Atom) -> Atom:
         return Atom(atom.predicate, _sub_args(atom.args, self.b), atom.loc)
 
+    def walk_fluent_ref(self, ref: FluentRef) -> FluentRef:
+        return FluentRef(ref.name, _sub_args(ref.args, self.b), ref.loc)
+
     def walk_and(self, cond: And) -> And:
-        return And(tuple(self.walk(c) for c in cond.operands))
+        return And(tuple([self.walk(c) for c in cond.operands]))
+
+    def walk_not(self, cond: Not) -> Not:
+        return Not(self.walk(cond.operand))
+
+    def walk_compare(self, cond: Compare) -> Compare:
+        return Compare(cond.op, self.walk(cond.left), self.walk(cond.right))
+
+    def walk_binary_op(self, expr: BinaryOp) -> BinaryOp:
+        return BinaryOp(expr.op, self.walk(expr.left), self.walk(expr.right))
+
+    def walk_when_effect(self, eff: WhenEffect) -> WhenEffect:
+        return WhenEffect(self.walk(eff.condition), self.walk(eff.effect))
+
+    def walk_add_effect(self, eff: AddEffect) -> AddEffect:
+        return AddEffect(self.walk_atom(eff.atom))
+
+    def walk_delete_effect(self, eff: DeleteEffect) -> DeleteEffect:
+        return DeleteEffect(self.walk_atom(eff.atom))
+
+    def walk_and_effect(self, eff: AndEffect) -> AndEffect:
+        return AndEffect(tuple([self.walk(e) for e in eff.effects]))
+
+    def walk_numeric_effect(self, eff: NumericEffect) -> NumericEffect:
+        return NumericEffect(eff.op, self.walk_fluent_ref(eff.fluent), self.walk(eff.value))
 
 
 def substitute_expr(expr: NumExpr, b: Mapping[str, str]) -> NumExpr:

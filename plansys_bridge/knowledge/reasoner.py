@@ -21,7 +21,7 @@ from plansys_bridge.knowledge.context import EvalContext, EvaluationError, Undef
 from plansys_bridge.knowledge.derived import DerivedRules
 from plansys_bridge.knowledge.formulas import compare, describe_expr, negate
 from plansys_bridge.knowledge.grounding import ground_args
-from plansys_bridge.knowledge.joins import JoinSolver
+from plansys_bridge.knowledge.joins import CACHE_LIMIT, JoinSolver
 from plansys_bridge.knowledge.state import Args, FluentKey, State
 from plansys_bridge.pddl.model import (
     AddEffect,
@@ -30,6 +30,7 @@ from plansys_bridge.pddl.model import (
     Atom,
     BinaryOp,
     Compare,
+    Condition,
     DeleteEffect,
     Domain,
     DurationRef,
@@ -62,25 +63,40 @@ class _Truth(Visitor[bool]):
 
     def __init__(self, reasoner: Reasoner) -> None:
         self.r = reasoner
+        self._negated: dict[int, tuple[Forall, Condition]] = {}
 
-    def walk(self, node: Any, *args: Any) -> bool:
-        if node.__class__ is Atom:  # the hot path: no dispatch for atoms
-            b, ctx = args
+    # The hot path: fixed arguments (no packing), atoms tested before any dispatch,
+    # conjunctions and disjunctions test their atoms in line.
+    def walk(self, node: Any, b: Bindings, ctx: EvalContext) -> bool:
+        cls = node.__class__
+        if cls is Atom:
             return ground_args(node.args, b) in ctx.tuples(node.predicate)
-        fn = self._methods.get(node.__class__) or self.method_for(node.__class__)
-        result: bool = fn(self, node, *args)
+        fn = self._methods.get(cls)
+        if fn is None:
+            fn = self.method_for(cls)
+        result: bool = fn(self, node, b, ctx)
         return result
 
     def walk_atom(self, cond: Atom, b: Bindings, ctx: EvalContext) -> bool:
         return ground_args(cond.args, b) in ctx.tuples(cond.predicate)
 
     def walk_and(self, cond: And, b: Bindings, ctx: EvalContext) -> bool:
-        walk = self.walk
-        return all(walk(c, b, ctx) for c in cond.operands)
+        for c in cond.operands:
+            if c.__class__ is Atom:
+                if ground_args(c.args, b) not in ctx.tuples(c.predicate):
+                    return False
+            elif not self.walk(c, b, ctx):
+                return False
+        return True
 
     def walk_or(self, cond: Or, b: Bindings, ctx: EvalContext) -> bool:
-        walk = self.walk
-        return any(walk(c, b, ctx) for c in cond.operands)
+        for c in cond.operands:
+            if c.__class__ is Atom:
+                if ground_args(c.args, b) in ctx.tuples(c.predicate):
+                    return True
+            elif self.walk(c, b, ctx):
+                return True
+        return False
 
     def walk_not(self, cond: Not, b: Bindings, ctx: EvalContext) -> bool:
         return not self.walk(cond.operand, b, ctx)
@@ -102,13 +118,29 @@ class _Truth(Visitor[bool]):
 
     def walk_forall(self, cond: Forall, b: Bindings, ctx: EvalContext) -> bool:
         inner, var_types = self.r._scope(cond.variables, b)
-        return next(self.r._solve(negate(cond.body), inner, var_types, ctx), None) is None
+        entry = self._negated.get(id(cond))
+        if entry is None or entry[0] is not cond:
+            if len(self._negated) > CACHE_LIMIT:
+                self._negated.clear()
+            entry = self._negated[id(cond)] = (cond, negate(cond.body))
+        return next(self.r._solve(entry[1], inner, var_types, ctx), None) is None
 
 
 class _Value(Visitor[float]):
     """The value of a numeric expression (``walk(expr, bindings, ctx)``)."""
 
     kinds = ("expression",)
+
+    def walk(self, node: Any, b: Bindings, ctx: EvalContext) -> float:
+        cls = node.__class__
+        if cls is Number:
+            value: float = node.value
+            return value
+        fn = self._methods.get(cls)
+        if fn is None:
+            fn = self.method_for(cls)
+        result: float = fn(self, node, b, ctx)
+        return result
 
     def walk_number(self, expr: Number, b: Bindings, ctx: EvalContext) -> float:
         return expr.value
@@ -161,9 +193,19 @@ class _Effects(Visitor[None]):
     def __init__(self, reasoner: Reasoner) -> None:
         self.r = reasoner
 
+    def walk(self, node: Any, b: Bindings, ctx: EvalContext, out: Changes) -> None:
+        fn = self._methods.get(node.__class__)
+        if fn is None:
+            fn = self.method_for(node.__class__)
+        fn(self, node, b, ctx, out)
+
     def walk_and_effect(self, eff: AndEffect, b: Bindings, ctx: EvalContext, out: Changes) -> None:
+        methods = self._methods  # dispatch in line: most effects are parts of an ``and``
         for sub in eff.effects:
-            self.walk(sub, b, ctx, out)
+            fn = methods.get(sub.__class__)
+            if fn is None:
+                fn = self.method_for(sub.__class__)
+            fn(self, sub, b, ctx, out)
 
     def walk_add_effect(self, eff: AddEffect, b: Bindings, ctx: EvalContext, out: Changes) -> None:
         out.adds.append(Atom(eff.atom.predicate, ground_args(eff.atom.args, b)))
@@ -211,10 +253,8 @@ class Reasoner(JoinSolver):
         # Bound walk methods, not wrappers: one call less per node on the hot path.
         self._holds = _Truth(self).walk
         self._value: Callable[[NumExpr, Bindings, EvalContext], float] = _Value().walk
-        self._effects = _Effects(self)
-
-    def _collect(self, effect: Effect, b: Bindings, ctx: EvalContext, out: Changes) -> None:
-        self._effects.walk(effect, b, ctx, out)
+        self._collect: Callable[[Effect, Bindings, EvalContext, Changes], None]
+        self._collect = _Effects(self).walk
 
     def _derived_table(self, state: State) -> dict[str, frozenset[Args]]:
         cache = state.cache()

@@ -82,6 +82,7 @@ class _Shape:
     nodes: tuple[tuple[str, bool], ...]  # (field, holds a tuple of nodes)
     terms: tuple[tuple[str, bool], ...]  # (field, holds a tuple of terms)
     binds: bool  # has a ``variables`` field of TypedNames
+    init: tuple[str, ...]  # constructor arguments, in order
 
 
 _SHAPES: dict[type, _Shape] = {}
@@ -117,7 +118,8 @@ def _shape(cls: type) -> _Shape:
             term_fields.append((f.name, annotation.startswith("tuple")))
         elif f.name == "variables":
             binds = True
-    found = _Shape(tuple(nodes), tuple(term_fields), binds)
+    init = tuple(f.name for f in dataclasses.fields(cls) if f.init)
+    found = _Shape(tuple(nodes), tuple(term_fields), binds, init)
     _SHAPES[cls] = found
     return found
 
@@ -256,4 +258,6 @@ class Transformer(Walker[Any]):
             mapped = tuple(self.term(t) for t in value) if many else self.term(value)
             if mapped != value:
                 changes[name] = mapped
-        return dataclasses.replace(node, **changes) if changes else node
+        if not changes:
+            return node
+        return type(node)(*[changes.get(f, getattr(node, f)) for f in shape.init])
