@@ -13,7 +13,7 @@ import pytest
 from mavlink_support import free_port
 from plansys_bridge_adapters.mavlink.double import SimParams, VehicleDouble, VehicleSim
 from plansys_bridge_adapters.mavlink.geo import GeoPoint, offset
-from plansys_bridge_adapters.mavlink.modes import COPTER_MODES
+from plansys_bridge_adapters.mavlink.modes import mode_number
 from pymavlink.dialects.v20 import ardupilotmega as ml
 
 
@@ -84,8 +84,8 @@ def test_rover_heartbeat_and_modes() -> None:
             assert double.wait_for(lambda s: s["time"] > 3.0, 5)
             assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, 15) == ml.MAV_RESULT_ACCEPTED
             client.until(lambda m: m.get_type() == "HEARTBEAT" and m.custom_mode == 15)
-            # 6 is FOLLOW on a rover but 9 (LAND) does not exist there
-            assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, 9) == ml.MAV_RESULT_UNSUPPORTED
+            # 9 is LAND on a copter but CIRCLE on a rover; 14 (FLIP) is no rover mode
+            assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, 14) == ml.MAV_RESULT_UNSUPPORTED
         finally:
             client.close()
 
@@ -129,7 +129,7 @@ def test_arming_refused_until_ekf_then_auto_disarm() -> None:
                 == 0
             )
             client.until(lambda m: m.get_type() == "HEARTBEAT")
-            assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, COPTER_MODES["GUIDED"]) == 0
+            assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, mode_number("copter", "GUIDED")) == 0
             assert client.command(ml.MAV_CMD_COMPONENT_ARM_DISARM, 1) == ml.MAV_RESULT_FAILED
             texts = [m.text for m in client.seen if m.get_type() == "STATUSTEXT"]
             assert "Arm: Need Position Estimate" in texts
@@ -162,7 +162,7 @@ def test_takeoff_needs_arming_and_guided() -> None:
     sim.step(1.0)
     sim._command(ml.MAV_CMD_NAV_TAKEOFF, (0, 0, 0, 0, 0, 0, 10.0))
     assert sim.landed and not sim.armed
-    sim._command(ml.MAV_CMD_DO_SET_MODE, (1, COPTER_MODES["GUIDED"], 0, 0, 0, 0, 0))
+    sim._command(ml.MAV_CMD_DO_SET_MODE, (1, mode_number("copter", "GUIDED"), 0, 0, 0, 0, 0))
     sim._command(ml.MAV_CMD_COMPONENT_ARM_DISARM, (1, 0, 0, 0, 0, 0, 0))
     sim._command(ml.MAV_CMD_NAV_TAKEOFF, (0, 0, 0, 0, 0, 0, 10.0))
     for _ in range(200):
@@ -252,7 +252,7 @@ def test_non_numbers_in_commands_are_refused_not_fatal() -> None:
             assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, inf) == denied
             assert client.command(ml.MAV_CMD_COMPONENT_ARM_DISARM, 1, nan) == denied
             assert client.command(ml.MAV_CMD_SET_MESSAGE_INTERVAL, nan, 1e5) == denied
-            guided = COPTER_MODES["GUIDED"]
+            guided = mode_number("copter", "GUIDED")
             assert client.command(ml.MAV_CMD_DO_SET_MODE, 1, guided) == ml.MAV_RESULT_ACCEPTED
             assert client.command(ml.MAV_CMD_COMPONENT_ARM_DISARM, 1) == ml.MAV_RESULT_ACCEPTED
             failed = ml.MAV_RESULT_FAILED
