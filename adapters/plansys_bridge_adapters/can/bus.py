@@ -35,6 +35,7 @@ from typing import Any, Literal, Protocol
 import can
 
 from plansys_bridge.errors import AdapterError
+from plansys_bridge.retry import retrying
 
 from .dbc import Frame, MalformedFrame, MobileBaseDbc
 
@@ -363,24 +364,26 @@ class CanBusClient:
     async def _reopen(self) -> None:
         period = self.config.reopen_period
         assert period is not None
+
+        def retrying_in(exc: BaseException, wait: float) -> None:
+            _LOG.warning("%s; retrying in %g s", exc, wait)
+
         try:
-            while not self._closing:
-                await asyncio.sleep(period)
-                await self._stop_reader()
-                if self._broken is not None:
-                    broken, self._broken = self._broken, None
-                    with contextlib.suppress(Exception):
-                        broken.shutdown()
-                try:
+            await asyncio.sleep(period)
+            async for attempt in retrying(every=period, on=BusOpenError, before_retry=retrying_in):
+                with attempt:
+                    if self._closing:
+                        return
+                    await self._stop_reader()
+                    if self._broken is not None:
+                        broken, self._broken = self._broken, None
+                        with contextlib.suppress(Exception):
+                            broken.shutdown()
                     bus = self._create_bus()
-                except BusOpenError as exc:
-                    _LOG.warning("%s; retrying in %g s", exc, period)
-                    continue
-                self._bus = bus
-                self._start_reader(bus)
-                self.counters.reopens += 1
-                _LOG.warning("%s: reopened after a bus error", self.config.describe())
-                return
+            self._bus = bus
+            self._start_reader(bus)
+            self.counters.reopens += 1
+            _LOG.warning("%s: reopened after a bus error", self.config.describe())
         finally:
             self._reopen_task = None
 

@@ -19,6 +19,8 @@ from typing import Any
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from plansys_bridge.retry import retrying
+
 from .errors import LinkError
 
 MAV_COMP_ID_MISSIONPLANNER = 190
@@ -71,26 +73,25 @@ class MavlinkLink:
         """Open the connection, retrying every 0.5 s until loop time ``deadline``."""
         loop = self._loop = asyncio.get_running_loop()
         device, kwargs = _device(self.url)
-        last: Exception | None = None
-        while True:
-            try:
-                conn = await loop.run_in_executor(
-                    None,
-                    lambda: mavutil.mavlink_connection(
-                        device,
-                        source_system=self.settings.source_system,
-                        source_component=self.settings.source_component,
-                        **kwargs,
-                    ),
-                )
-                self._conn = self._speak_mavlink2(conn)
-                self._closing.clear()
-                return
-            except (OSError, ValueError) as exc:
-                last = exc
-            if loop.time() + 0.5 > deadline:
-                raise LinkError(self.url, f"cannot open the link: {last}") from last
-            await asyncio.sleep(0.5)
+
+        def connect() -> Any:
+            return mavutil.mavlink_connection(
+                device,
+                source_system=self.settings.source_system,
+                source_component=self.settings.source_component,
+                **kwargs,
+            )
+
+        try:
+            async for attempt in retrying(
+                every=0.5, within=deadline - loop.time(), on=(OSError, ValueError)
+            ):
+                with attempt:
+                    conn = await loop.run_in_executor(None, connect)
+        except (OSError, ValueError) as exc:
+            raise LinkError(self.url, f"cannot open the link: {exc}") from exc
+        self._conn = self._speak_mavlink2(conn)
+        self._closing.clear()
 
     def _speak_mavlink2(self, conn: Any) -> Any:
         """Give the link its own MAVLink 2 codec (ArduPilot's default protocol).

@@ -30,7 +30,7 @@ from collections import deque
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from .arming import arming_texts, starting_up
+from .arming import arm
 from .errors import CommandRefused, CommandTimeout, LinkError, MavlinkError, WaitTimeout
 from .geo import GeoPoint
 from .link import DEFAULT_TELEMETRY_HZ, LinkSettings, MavlinkLink
@@ -359,33 +359,7 @@ class MavlinkVehicle(VehicleSupervision):
         battery below its arming voltage, a failing check) will not go away by
         waiting and fails at once with the vehicle's words.
         """
-        loop = asyncio.get_running_loop()
-        deadline = loop.time() + timeout
-        start = self._now()
-        previous: str | None = None
-        while not self.telemetry.armed:
-            tried = self._now()
-            try:
-                await self.command(ML.MAV_CMD_COMPONENT_ARM_DISARM, 1)
-            except CommandRefused as exc:
-                if exc.result not in ("MAV_RESULT_FAILED", "MAV_RESULT_TEMPORARILY_REJECTED"):
-                    raise
-                reason = arming_texts(self.statustexts, tried) or exc.reason
-                if reason and reason == previous and not starting_up(reason):
-                    raise CommandRefused(self.url, "arming", exc.result, reason) from exc
-                previous = reason
-                if loop.time() + retry_period > deadline:
-                    why = arming_texts(self.statustexts, start) or exc.reason
-                    raise CommandRefused(
-                        self.url, "arming", exc.result, f"still refused after {timeout:g} s: {why}"
-                    ) from exc
-                await asyncio.sleep(retry_period)
-                continue
-            await self.wait_for(
-                lambda: self.telemetry.armed,
-                max(1.0, deadline - loop.time()),
-                "a HEARTBEAT showing the vehicle armed",
-            )
+        await arm(self, timeout, retry_period)
 
     async def disarm(self, confirm_timeout: float = 3.0) -> None:
         """Disarm (on the ground).
