@@ -1,7 +1,10 @@
-"""Small-distance geodesy: metres between fixes and offsets from home.
+"""Geodesy on the WGS84 ellipsoid, by geographiclib: metres between fixes, offsets.
 
-Missions span at most a few kilometres, so a spherical Earth is accurate to well
-under a metre, which is below GPS noise; no projection library is needed.
+Distances and bearings are geographiclib's geodesics (Karney's algorithms, accurate
+to nanometres). "Metres north and east of home" are the geodesic's length and
+direction from home (an azimuthal equidistant view of the ground), so
+:func:`offset` and :func:`north_east_m` undo each other exactly and a location
+``{north: 60}`` is 60 m from home however far from the equator home is.
 """
 
 from __future__ import annotations
@@ -9,7 +12,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-EARTH_RADIUS_M = 6_378_137.0
+from geographiclib.geodesic import Geodesic
+
+_WGS84 = Geodesic.WGS84
+_INVERSE = Geodesic.DISTANCE | Geodesic.AZIMUTH
+_DIRECT = Geodesic.LATITUDE | Geodesic.LONGITUDE | Geodesic.LONG_UNROLL
 
 
 @dataclass(frozen=True)
@@ -21,13 +28,15 @@ class GeoPoint:
     alt: float = 0.0
 
 
+def _inverse(a: GeoPoint, b: GeoPoint) -> tuple[float, float]:
+    """Geodesic length (m) and initial azimuth (degrees) from ``a`` to ``b``."""
+    line = _WGS84.Inverse(a.lat, a.lon, b.lat, b.lon, _INVERSE)
+    return float(line["s12"]), float(line["azi1"])
+
+
 def distance_m(a: GeoPoint, b: GeoPoint) -> float:
-    """Horizontal great-circle distance in metres (haversine)."""
-    phi1, phi2 = math.radians(a.lat), math.radians(b.lat)
-    dphi = phi2 - phi1
-    dlmb = math.radians(b.lon - a.lon)
-    h = math.sin(dphi / 2) ** 2 + math.cos(phi1) * math.cos(phi2) * math.sin(dlmb / 2) ** 2
-    return 2 * EARTH_RADIUS_M * math.asin(min(1.0, math.sqrt(h)))
+    """Horizontal distance in metres along the ellipsoid."""
+    return _inverse(a, b)[0]
 
 
 def distance_3d_m(a: GeoPoint, b: GeoPoint) -> float:
@@ -37,21 +46,19 @@ def distance_3d_m(a: GeoPoint, b: GeoPoint) -> float:
 
 def offset(origin: GeoPoint, north_m: float, east_m: float, up_m: float = 0.0) -> GeoPoint:
     """The point ``north_m``/``east_m`` metres from ``origin`` and ``up_m`` above it."""
-    dlat = math.degrees(north_m / EARTH_RADIUS_M)
-    dlon = math.degrees(east_m / (EARTH_RADIUS_M * math.cos(math.radians(origin.lat))))
-    return GeoPoint(origin.lat + dlat, origin.lon + dlon, origin.alt + up_m)
+    length = math.hypot(north_m, east_m)
+    azimuth = math.degrees(math.atan2(east_m, north_m))
+    end = _WGS84.Direct(origin.lat, origin.lon, azimuth, length, _DIRECT)
+    return GeoPoint(float(end["lat2"]), float(end["lon2"]), origin.alt + up_m)
 
 
 def north_east_m(origin: GeoPoint, point: GeoPoint) -> tuple[float, float]:
     """Inverse of :func:`offset` (horizontal part): metres north and east of ``origin``."""
-    north = math.radians(point.lat - origin.lat) * EARTH_RADIUS_M
-    east = (
-        math.radians(point.lon - origin.lon) * EARTH_RADIUS_M * math.cos(math.radians(origin.lat))
-    )
-    return north, east
+    length, azimuth = _inverse(origin, point)
+    rad = math.radians(azimuth)
+    return length * math.cos(rad), length * math.sin(rad)
 
 
 def bearing_deg(a: GeoPoint, b: GeoPoint) -> float:
     """Initial bearing from ``a`` to ``b`` in degrees, 0 = north, clockwise, [0, 360)."""
-    north, east = north_east_m(a, b)
-    return math.degrees(math.atan2(east, north)) % 360.0
+    return _inverse(a, b)[1] % 360.0
