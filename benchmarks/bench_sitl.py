@@ -79,7 +79,7 @@ def survey(speedup: float, workdir: Path) -> dict[str, float]:
         data = yaml.safe_load(path.read_text())
         mission = mission_from_dict(data, source=str(path), base_dir=path.parent)
         started = time.monotonic()
-        report = run_mission(mission)
+        report = run_mission(mission, out=None)
         wall = time.monotonic() - started
     finally:
         sitl.stop()
@@ -191,8 +191,7 @@ def main() -> int:
         out["survey"] = {}
         for s in filter(None, args.speedups.split(",")):
             out["survey"][f"x{float(s):g}"] = row = survey(float(s), workdir)
-            if not args.json:
-                print(f"survey x{float(s):g}: {json.dumps(row)}", flush=True)
+            print(f"survey x{float(s):g}: {json.dumps(row)}", file=sys.stderr, flush=True)
         out["round_trip"] = round_trips(args.round_trips, workdir)
         out["fault"] = fault_latency(workdir)
     if args.json:

@@ -130,6 +130,13 @@ BENCHES = (
         timeout=1200.0,
     ),
     Bench("mavlink", "bench_mavlink.py", (), "MAVLink adapter against the vehicle double"),
+    Bench(
+        "sitl",
+        "bench_sitl.py",
+        (),
+        "MAVLink adapter against ArduPilot SITL, vs raw pymavlink on the same SITL",
+        timeout=1200,
+    ),
     Bench("can", "bench_can.py", (), "CAN adapter on python-can's virtual bus"),
     Bench("bag_replay", "bench_bag_replay.py", (), "ROS bag reading and replay"),
     Bench(
