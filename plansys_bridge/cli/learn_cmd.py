@@ -25,7 +25,11 @@ def register(sub: Any) -> None:
     )
     p.add_argument("recordings", nargs="+", metavar="RECORDING", help="bags written by --record")
     p.add_argument(
-        "--domain", required=True, nargs="+", metavar="D", help="the missions' domain file(s)"
+        "--domain",
+        required=True,
+        action="append",
+        metavar="D",
+        help="the missions' domain file (repeat for a domain in several files)",
     )
     p.add_argument(
         "--functions",

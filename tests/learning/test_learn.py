@@ -156,7 +156,7 @@ def test_recording_of_another_domain_is_refused(
     recordings: list[Path], capsys: pytest.CaptureFixture[str]
 ) -> None:
     drone = CONFIGS / "pddl" / "drone_domain.pddl"
-    assert main(["learn", str(recordings[0]), "--domain", str(drone)]) == 2
+    assert main(["learn", "--domain", str(drone), str(recordings[0])]) == 2
     err = capsys.readouterr().err
     assert f"{recordings[0]}: action (" in err and "is not an action of domain" in err
 
