@@ -179,6 +179,9 @@ class MissionConfig(_Strict):
     """:class:`~plansys_bridge.execution.options.ExecutorOptions` settings
     (``at_start_timeout``, ``overrun_percentage``, ...)."""
     events: list[EventConfig] = Field(default_factory=list)
+    sensing: list[Any] = Field(default_factory=list)
+    """Rules writing sensor values into the knowledge; checked by
+    :mod:`plansys_bridge.sensing.load` against the domain and the performers."""
     record: str | None = None
     """Write the whole run to this ROS 2 bag (mcap)."""
     bid_costs: str | None = None

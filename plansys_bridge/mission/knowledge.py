@@ -68,6 +68,10 @@ def build_knowledge(mission: MissionConfig, domain: Domain) -> ProblemExpert:
                 knowledge.set_goal(mission.goal)
         _check_performer_actions(mission, knowledge)
         _rehearse_events(mission, knowledge)
+    if mission.sensing:
+        from plansys_bridge.sensing.load import load_rules
+
+        load_rules(mission, knowledge)  # every rule's names, before anything starts
     return knowledge
 
 

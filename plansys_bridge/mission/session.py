@@ -83,6 +83,7 @@ class MissionSession:
         self._tasks: list[asyncio.Task[None]] = []
         self._unsubscribe: Callable[[], None] | None = None
         self.bridge: Any = None
+        self.sensing: Any = None
 
     async def __aenter__(self) -> MissionSession:
         await self.hub.start()
@@ -116,6 +117,17 @@ class MissionSession:
             self._unsubscribe = self.knowledge.subscribe(
                 lambda _change: self.hub.publish(Topics.KNOWLEDGE, self.knowledge.to_msg())
             )
+            if self.mission.sensing:
+                from plansys_bridge.sensing.engine import start_sensing
+
+                self.sensing = start_sensing(
+                    self.mission,
+                    self.knowledge,
+                    self.hub.clock,
+                    self.performers,
+                    self._say,
+                    self.events_applied,
+                )
             loop = asyncio.get_running_loop()
             for event in self.mission.events:
                 self._tasks.append(loop.create_task(self._event(event)))
@@ -153,6 +165,9 @@ class MissionSession:
         for task in self._tasks:
             with contextlib.suppress(asyncio.CancelledError):
                 await task
+        if self.sensing is not None:
+            self.sensing.stop()
+            self.sensing = None
         if self._unsubscribe is not None:
             self._unsubscribe()
         for performer in reversed(self.performers):

@@ -193,6 +193,9 @@ class CanBusClient:
         self.dbc = dbc
         self.listener = listener
         self.counters = BusCounters()
+        self.frame_hooks: list[Callable[[can.Message], None]] = []
+        """Also called with every received data frame, before DBC decoding (sensing
+        rules read any signal of the database from them)."""
         self._factory = bus_factory
         self._kind: ReaderKind = "manual"
         self._bus: can.BusABC | None = None
@@ -324,6 +327,8 @@ class CanBusClient:
             self.counters.error_frames += 1
             self.listener.on_error_frame(msg)
             return
+        for hook in list(self.frame_hooks):
+            hook(msg)
         try:
             frame = self.dbc.decode(msg)
         except MalformedFrame as exc:
