@@ -1,0 +1,6 @@
+"""Sensing rules: sensor values (MAVLink, CAN, ROS topics) into the knowledge.
+
+:mod:`.expressions` parses rule conditions, :mod:`.rules` decides what a sample
+means (hysteresis), :mod:`.load` checks a mission's rules, :mod:`.engine` writes
+through the problem expert with rate limits, :mod:`.sources` is the plugin base.
+"""
