@@ -44,6 +44,7 @@ from .controller import Path, PathFollower, Pose2D
 from .dbc import BaseStatus, EStopCommand, MobileBaseDbc, OdomPose, VelocityCommand
 from .double import BaseDouble
 from .monitor import BaseMonitor, Mark, Problem
+from .replay import LogReplay
 from .settings import CanBaseSettings, Location, parse_settings
 
 __all__ = ["CanBasePerformer"]
@@ -72,6 +73,7 @@ class CanBasePerformer(ActionPerformer):
             "safety",
             "battery",
             "simulate_base",
+            "replay",
             "feedback_period",
             "record_topic",
             "record_period",
@@ -105,6 +107,8 @@ class CanBasePerformer(ActionPerformer):
         self.client = CanBusClient(settings.bus, self.dbc, self.monitor)
         self.double: BaseDouble | None = None
         """The simulated base started by ``simulate_base`` (None on a real bus)."""
+        self.replay: LogReplay | None = None
+        """The recorded log played in place of the base (``replay:``)."""
         self._counter = 0
         self._estop_counter = 0
         self._battery_written: float | None = None
@@ -163,10 +167,17 @@ class CanBasePerformer(ActionPerformer):
             reader = "poll" if isinstance(self.clock, VirtualClock) else "notifier"
         try:
             await self.client.open(reader=reader)
+            if self.settings.replay is not None:
+                # after the client: a virtual bus hears only what is sent once it exists
+                self.replay = LogReplay(self.clock, self.settings.bus.channel, self.settings.replay)
+                await self.replay.start()
         except Exception:
             if self.double is not None:
                 await self.double.stop()
                 self.double = None
+            if self.replay is not None:
+                await self.replay.stop()
+                self.replay = None
             raise
         self._health_task = asyncio.get_running_loop().create_task(
             self._watch_health(), name=f"{self.node_name}-base-health"
@@ -187,6 +198,9 @@ class CanBasePerformer(ActionPerformer):
         if self.double is not None:
             await self.double.stop()
             self.double = None
+        if self.replay is not None:
+            await self.replay.stop()
+            self.replay = None
 
     # -- the action -------------------------------------------------------------------
 

@@ -35,6 +35,7 @@ from plansys_bridge.mission_config import load_yaml_file
 from .bus import BusConfig, choose_interface
 from .controller import ControllerConfig, MotionLimits
 from .double import BaseDoubleConfig, BaseLimits
+from .replay import ReplaySettings, parse_replay
 
 T = TypeVar("T")
 
@@ -106,6 +107,8 @@ class CanBaseSettings:
     safety: SafetySettings = field(default_factory=SafetySettings)
     battery: BatterySettings | None = None
     simulate_base: BaseDoubleConfig | None = None
+    replay: ReplaySettings | None = None
+    """A recorded log played on the virtual bus in place of the base (:mod:`.replay`)."""
     feedback_period: float = 0.2
     record_topic: str = ""
     """Bag topic of the odometry pose when the mission is recorded ("": /<robot>/pose)."""
@@ -421,6 +424,15 @@ def parse_simulated_base(value: object, bus: BusConfig, key: str) -> BaseDoubleC
     return parse_dataclass(BaseDoubleConfig, rest, key, limits=limits)
 
 
+def _replay(value: object, bus: BusConfig, base_dir: Path, key: str) -> ReplaySettings | None:
+    if value not in (None, False) and bus.interface != "virtual":
+        raise ConfigError(
+            f"a recorded log is replayed on the 'virtual' interface, not {bus.interface!r}",
+            key=key,
+        )
+    return parse_replay(value, base_dir, key)
+
+
 def parse_settings(
     settings: Mapping[str, Any], actions: object, base_dir: Path, key: str
 ) -> tuple[CanBaseSettings, dict[str, tuple[str, ...]]]:
@@ -433,7 +445,10 @@ def parse_settings(
     if "locations" not in settings:
         raise ConfigError("missing: a locations file or mapping", key=f"{key}.locations")
     locations = load_locations(settings["locations"], base_dir, f"{key}.locations")
-    simulated = settings.get("simulate_base") not in (None, False)
+    replay = settings.get("replay") not in (None, False)
+    if replay and settings.get("simulate_base") not in (None, False):
+        raise ConfigError("a base is either simulated or replayed, not both", key=f"{key}.replay")
+    simulated = replay or settings.get("simulate_base") not in (None, False)
     bus = parse_bus(settings.get("bus"), f"{key}.bus", simulated=simulated)
     dbc_value = settings.get("dbc")
     dbc: Path | None = None
@@ -469,6 +484,7 @@ def parse_settings(
         simulate_base=parse_simulated_base(
             settings.get("simulate_base"), bus, f"{key}.simulate_base"
         ),
+        replay=_replay(settings.get("replay"), bus, base_dir, f"{key}.replay"),
         feedback_period=feedback,
         record_topic=record_topic,
         record_period=record_period,
