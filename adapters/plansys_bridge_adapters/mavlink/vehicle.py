@@ -125,6 +125,13 @@ class MavlinkVehicle(VehicleSupervision):
         self._wake()
 
     # ------------------------------------------------------------- loop side
+    def receive(self, msg: Any) -> None:
+        """Handle a message that came from elsewhere than the link (a replayed log)
+        exactly as a received one: telemetry, fault checks, listeners."""
+        if self._loop is None:
+            self._loop = asyncio.get_running_loop()
+        self._on_message(msg)
+
     def add_listener(self, callback: Callable[[Any], None]) -> Callable[[], None]:
         """Call ``callback(msg)`` for every message of this vehicle; returns remove."""
         self._listeners.append(callback)

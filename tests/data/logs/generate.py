@@ -12,7 +12,7 @@ BLFWriter ``base_r2d2.blf``), the base's frames as received, the commands as sen
 MAVLink: ``copter1.tlog`` is written with pymavlink's own encoder the way
 ``mavutil``'s ``.tlog`` logger stores it (an 8-byte big-endian microsecond stamp
 before each packet): an ArduCopter-like vehicle (system 1, component 1) taking off
-at the pad, flying north to the field, its battery falling below 25 % at t=40 s,
+at the pad, flying north to the field and back, its battery falling below 25 % at t=45 s,
 returning (RTL) and landing; HEARTBEAT 1 Hz, GLOBAL_POSITION_INT 5 Hz,
 SYS_STATUS and BATTERY_STATUS 1 Hz.
 """
@@ -108,17 +108,19 @@ def _write_tlog(path: Path) -> None:
 
     for step in range(0, 901):  # 90 s at 10 Hz
         t = step / 10.0
-        # the flight: climb 0-10 s, north to 100 m by 40 s, RTL 40-70 s, land 70-85 s
+        # the flight: climb 0-10 s, north to the field (100 m) by 40 s, back south
+        # in GUIDED; the battery falls below 25 % at 45 s and the vehicle switches to
+        # RTL (home by 70 s), then lands 70-85 s
         if t < 10:
             north, alt, mode = 0.0, t, guided
         elif t < 40:
             north, alt, mode = (t - 10) / 30 * 100, 10.0, guided
         elif t < 70:
-            north, alt, mode = 100 - (t - 40) / 30 * 100, 10.0, rtl
+            north, alt, mode = 100 - (t - 40) / 30 * 100, 10.0, guided if t < 45 else rtl
         else:
             north, alt, mode = 0.0, max(0.0, 10 - (t - 70) / 15 * 10), land
         armed = t < 86
-        battery = round(60 - t * 0.9)  # 60 % at take-off, below 25 % at t=40 s
+        battery = max(0, round(60 - t * 0.8))  # 60 % at take-off, 24 % at t=45 s
         if step % 10 == 0:
             base_mode = 0x01 | (0x80 if armed else 0) | 0x08
             put(t, mavlink2.MAVLink_heartbeat_message(2, 3, base_mode, mode, 4, 3))

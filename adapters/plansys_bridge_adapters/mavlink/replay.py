@@ -1,0 +1,225 @@
+"""``mavlink_replay``: a recorded flight (``.tlog``) as the vehicle, on the mission clock.
+
+The log plays from the moment the performer starts, at its recorded pace (``rate``
+> 1 faster), and every message goes through a :class:`MavlinkVehicle` exactly as if
+it had come over a link: its telemetry cache, mode and arming state, STATUSTEXTs and
+listeners, so sensing rules (``from: mavlink``) fire from the recorded values and a
+plan reacts to them as it would in flight. On the virtual clock a 15-minute flight
+replays in moments. Commands are not sent anywhere: what the vehicle did is what the
+log says it did.
+
+Each action of the plan is matched to a stretch of the recording (``segments``, in
+seconds from the log's first message, by action text): it finishes when the replay
+passes the end of the first stretch for that action not already over, reporting
+progress through it. An action with no stretch left fails saying so, and so does one
+whose stretch the log ends before (a cut-off recording)::
+
+    - kind: mavlink_replay
+      name: copter1
+      actions: {takeoff: [copter1], fly: [copter1], land: [copter1]}
+      log: ../bags/logs/copter1.tlog
+      rate: 1.0
+      segments:
+        - {action: (takeoff copter1 pad), start: 0, end: 10}
+        - {action: (fly copter1 pad field), start: 10, end: 40}
+        - {action: (land copter1 pad), start: 40, end: 86}
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar
+
+from plansys_bridge.errors import ConfigError
+from plansys_bridge.performers.base import (
+    ActionFailed,
+    ActionGoal,
+    ActionPerformer,
+    PerformerContext,
+)
+
+from .tlog import TlogError, TlogSummary, read_tlog, summarize_tlog
+from .vehicle import MavlinkVehicle
+
+__all__ = ["MavlinkReplayPerformer", "Segment"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Segment:
+    action: str
+    """Normalised action text: ``(fly copter1 pad field)``."""
+    start: float
+    end: float
+
+
+def _norm(text: str) -> str:
+    return "(" + " ".join(text.strip().strip("()").lower().split()) + ")"
+
+
+def _number(value: object, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or value < 0:
+        raise ConfigError(f"must be a number of seconds >= 0, got {value!r}", key=key)
+    return float(value)
+
+
+def parse_segments(value: object, key: str) -> list[Segment]:
+    if not isinstance(value, list) or not value:
+        raise ConfigError(
+            "a list of {action: (fly copter1 a b), start: S, end: S} (seconds into the log)",
+            key=key,
+        )
+    segments = []
+    for i, item in enumerate(value):
+        where = f"{key}[{i}]"
+        if not isinstance(item, Mapping) or set(item) != {"action", "start", "end"}:
+            raise ConfigError("expected exactly {action, start, end}", key=where)
+        action = item["action"]
+        if not isinstance(action, str) or not action.strip().startswith("("):
+            raise ConfigError("an action such as (fly copter1 pad field)", key=f"{where}.action")
+        start, end = _number(item["start"], f"{where}.start"), _number(item["end"], f"{where}.end")
+        if end <= start:
+            raise ConfigError(f"end {end:g} is not after start {start:g}", key=f"{where}.end")
+        segments.append(Segment(_norm(action), start, end))
+    return segments
+
+
+class MavlinkReplayPerformer(ActionPerformer):
+    """Serves a plan's actions from a recorded flight (see the module docs)."""
+
+    settings_keys: ClassVar[frozenset[str]] = frozenset({"log", "rate", "segments"})
+
+    def __init__(
+        self,
+        context: PerformerContext,
+        node_name: str,
+        actions: Mapping[str, Sequence[str]],
+        *,
+        log: Path,
+        summary: TlogSummary,
+        segments: list[Segment],
+        rate: float = 1.0,
+        heartbeat_period: float = 1.0,
+        commit_timeout: float = 2.0,
+    ) -> None:
+        super().__init__(
+            context,
+            node_name,
+            actions,
+            heartbeat_period=heartbeat_period,
+            commit_timeout=commit_timeout,
+        )
+        self.log_path = log
+        self.summary = summary
+        self.segments = segments
+        self.rate = rate
+        self.vehicle = MavlinkVehicle(f"tlog:{log}")
+        self.log_time = 0.0
+        """Seconds into the recording replayed so far."""
+        self.ended = False
+        self._progress = asyncio.Event()
+        self._replay_task: asyncio.Task[None] | None = None
+
+    @classmethod
+    def from_config(
+        cls, config: Mapping[str, Any], context: PerformerContext, *, key: str = "performer"
+    ) -> list[ActionPerformer]:
+        parsed = cls.parse_config(config, key=key)
+        settings = parsed.settings
+        raw = settings.get("log")
+        if not isinstance(raw, str) or not raw:
+            raise ConfigError("the recorded flight: a .tlog file", key=f"{key}.log")
+        path = Path(raw).expanduser()
+        path = path if path.is_absolute() else context.base_dir / path
+        try:
+            summary = summarize_tlog(path)
+        except TlogError as exc:
+            raise ConfigError(str(exc), key=f"{key}.log") from exc
+        rate = settings.get("rate", 1.0)
+        if isinstance(rate, bool) or not isinstance(rate, int | float) or not rate > 0:
+            raise ConfigError(f"must be a number > 0, got {rate!r}", key=f"{key}.rate")
+        segments = parse_segments(settings.get("segments"), f"{key}.segments")
+        length = summary.last - summary.first
+        for i, seg in enumerate(segments):
+            if seg.end > length + 1e-6:
+                raise ConfigError(
+                    f"ends at {seg.end:g} s but the log lasts {length:.1f} s",
+                    key=f"{key}.segments[{i}].end",
+                )
+        performer = cls(
+            context,
+            parsed.name,
+            parsed.actions,
+            log=path,
+            summary=summary,
+            segments=segments,
+            rate=float(rate),
+            heartbeat_period=parsed.heartbeat_period,
+            commit_timeout=parsed.commit_timeout,
+        )
+        return [performer]
+
+    def connects_to(self) -> str:
+        return f"the recorded flight {self.log_path} ({self.summary.messages} messages)"
+
+    async def setup(self) -> None:
+        self._replay_task = asyncio.get_running_loop().create_task(
+            self._play(), name=f"tlog-replay {self.node_name}"
+        )
+
+    async def teardown(self) -> None:
+        if self._replay_task is not None:
+            self._replay_task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._replay_task
+            self._replay_task = None
+
+    async def _play(self) -> None:
+        start = self.clock.now()
+        first = self.summary.first
+        try:
+            for msg in read_tlog(self.log_path):
+                offset = msg._timestamp - first
+                wait = start + offset / self.rate - self.clock.now()
+                if wait > 0:
+                    await self.clock.sleep(wait)
+                self.log_time = offset
+                self.vehicle.receive(msg)
+                self._tick()
+        except TlogError as exc:  # the file changed since it was checked
+            log.error("%s: %s", self.node_name, exc)
+        self.ended = True
+        self._tick()
+        log.info("%s: the recorded flight ended at %.1f s", self.node_name, self.log_time)
+
+    def _tick(self) -> None:
+        self._progress.set()
+        self._progress = asyncio.Event()
+
+    def _segment(self, goal: ActionGoal) -> Segment | None:
+        text = _norm(goal.full_name)
+        return next((s for s in self.segments if s.action == text and s.end > self.log_time), None)
+
+    async def execute(self, goal: ActionGoal) -> str | None:
+        segment = self._segment(goal)
+        if segment is None:
+            raise ActionFailed(
+                f"the recorded flight has no stretch for {goal.full_name} after "
+                f"{self.log_time:.1f} s"
+            )
+        while self.log_time < segment.end:
+            if self.ended:
+                raise ActionFailed(
+                    f"the recorded flight ends at {self.log_time:.1f} s, before "
+                    f"{goal.full_name} ends at {segment.end:g} s"
+                )
+            done = (self.log_time - segment.start) / (segment.end - segment.start)
+            self.feedback(min(1.0, max(0.0, done)), f"replaying {self.log_time:.1f} s")
+            await self._progress.wait()
+        return f"replayed {segment.start:g}-{segment.end:g} s of {self.log_path.name}"
