@@ -130,6 +130,14 @@ class SensingEngine:
             for runner in self.runners:
                 name = runner.rule.config.performer
                 performer = performers.get(name) if name is not None else None
+                if name is not None and performer is None:
+                    # ``plansys-bridge run --no-performers``: the link is in another process
+                    log.warning(
+                        "%s: performer %s runs in another process; its rule does not run here",
+                        runner.rule.describe(),
+                        name,
+                    )
+                    continue
                 self._detach.append(runner.rule.source.attach(performer, runner.feed))
         except BaseException:
             self.stop()

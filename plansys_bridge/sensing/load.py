@@ -185,7 +185,7 @@ class _Loader:
         except ExpressionError as exc:
             raise self.error(exc.message, [index, key], exc.column) from exc
         if fields is not None:
-            for name in sorted(expr.fields - fields):
+            for name in sorted(n for n in expr.fields if n not in fields):
                 column = text.find(name) + 1 or None
                 raise self.error(
                     f"no field {name!r} in what this rule reads"

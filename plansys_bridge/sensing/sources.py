@@ -15,7 +15,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from importlib.metadata import entry_points
+from importlib.metadata import EntryPoint, entry_points
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -84,13 +84,25 @@ class SensingSource:
         raise NotImplementedError
 
 
+BUILTIN = {
+    "mavlink": "plansys_bridge_adapters.mavlink.sensing:MavlinkMessageSource",
+    "can": "plansys_bridge_adapters.can.sensing:CanSignalSource",
+    "ros1": "plansys_bridge.sensing.ros:Ros1TopicSource",
+    "ros2": "plansys_bridge.sensing.ros:Ros2TopicSource",
+}
+"""The project's own sources, as its entry points name them: used only for a name the
+installed metadata lacks (an editable install made before the source was added)."""
+
+
 @functools.cache
 def load_source_kind(kind: str) -> type[SensingSource]:
     """The source class registered as ``kind``; PluginError when unknown."""
     eps = {ep.name: ep for ep in entry_points(group=ENTRY_POINT_GROUP)}
     ep = eps.get(kind)
+    if ep is None and kind in BUILTIN:
+        ep = EntryPoint(kind, BUILTIN[kind], ENTRY_POINT_GROUP)
     if ep is None:
-        known = ", ".join(sorted(eps)) or "none installed"
+        known = ", ".join(sorted({*eps, *BUILTIN})) or "none installed"
         raise PluginError(f"unknown sensing source {kind!r} (known: {known})")
     try:
         cls = ep.load()
