@@ -201,11 +201,18 @@ class ExecuteAction(ActionBehaviour):
             name=f"execute {rt.record.request_id}",
         )
         ctx.track(self.task)
-        self.task.add_done_callback(lambda _t: ctx.wake())
+        self.task.add_done_callback(self._ended)
+
+    def _ended(self, _task: asyncio.Task[ActionOutcome]) -> None:
+        self.ctx.resume(self.rt.index)
+        self.ctx.wake()
 
     def step(self) -> Status:
         task = self.task
-        if task is None or not task.done():
+        if task is None:
+            return Status.RUNNING
+        if not task.done():
+            self.ctx.rest(self.rt)
             return Status.RUNNING
         if task.cancelled():
             return self.fail("execution task cancelled")

@@ -61,7 +61,7 @@ from plansys_bridge.planning.plan import Plan
 from plansys_bridge.planning.plan_graph import PlanGraph, build_plan_graph
 
 if TYPE_CHECKING:
-    from plansys_bridge.knowledge.problem_expert import ProblemExpert
+    from plansys_bridge.knowledge.problem_expert import KnowledgeChange, ProblemExpert
     from plansys_bridge.planning.planner import Planner
 
 __all__ = ["Executor"]
@@ -264,11 +264,15 @@ class Executor:
         event = asyncio.Event()
         loop_thread = threading.get_ident()
 
-        def from_knowledge(_change: object) -> None:
+        def changed(change: KnowledgeChange) -> None:
+            ctx.knowledge_changed(change)
+            event.set()
+
+        def from_knowledge(change: KnowledgeChange) -> None:
             if threading.get_ident() == loop_thread:
-                event.set()
+                changed(change)
             else:
-                loop.call_soon_threadsafe(event.set)
+                loop.call_soon_threadsafe(changed, change)
 
         ctx.bind_wake(event.set)
         unsubscribe = self.knowledge.subscribe(from_knowledge)
@@ -289,6 +293,7 @@ class Executor:
                     ctx.cancelled = True
                     root.stop(Status.INVALID)
                     break
+                ctx.pass_deadlines()
                 self._tick(root, ctx)
                 if ctx.changed and dot is not None:
                     due = last_dot + self.options.dot_period

@@ -26,13 +26,14 @@ from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, Topic
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import Atom, Condition, Effect, FluentRef, FluentValue
+from plansys_bridge.pddl.walkers import Collector
 from plansys_bridge.planning.orderings import END, GROUND, START, Point
 from plansys_bridge.planning.plan import PlanStep
 from plansys_bridge.planning.plan_graph import PlanGraph
 from plansys_bridge.planning.requirement_text import describe_unmet
 
 if TYPE_CHECKING:
-    from plansys_bridge.knowledge.problem_expert import ProblemExpert
+    from plansys_bridge.knowledge.problem_expert import KnowledgeChange, ProblemExpert
 
 __all__ = ["ActionRuntime", "EffectDelta", "PlanContext"]
 
@@ -90,6 +91,25 @@ class EffectDelta:
                     knowledge.set_function(FluentValue(FluentRef(name, args), old))
 
 
+class _Reads(Collector):
+    """Predicate and function names a condition reads; ``derived`` is set when it
+    reads a derived predicate (whose inputs are not named in the condition)."""
+
+    kinds = ("condition", "expression")
+
+    def __init__(self, derived: frozenset[str]) -> None:
+        self.derived_names = derived
+        self.names: set[str] = set()
+        self.derived = False
+
+    def walk_atom(self, node: Atom) -> None:
+        self.names.add(node.predicate)
+        self.derived = self.derived or node.predicate in self.derived_names
+
+    def walk_fluent_ref(self, node: FluentRef) -> None:
+        self.names.add(node.name)
+
+
 @dataclass
 class ActionRuntime:
     """One action's progress: which of its happenings took place, and why it stopped."""
@@ -108,6 +128,9 @@ class ActionRuntime:
     client: ActionClient | None = None
     next_feedback_info: float = -math.inf
     """Mission time before which a FEEDBACK updates the record without an info."""
+    may_rest: bool = False
+    """The branch is the standard subtree: while its performer works it needs a tick
+    only when the performer ends, a deadline passes or what its over-all reads changes."""
 
     @property
     def text(self) -> str:
@@ -171,6 +194,9 @@ class PlanContext:
                     self.dependents[j].add(i)
         self.active: set[int] = {i for i in range(len(self.actions)) if not graph.waits(i, START)}
         """Branches worth ticking: not parked waiting for a predecessor."""
+        self.resting: set[int] = set()
+        """Branches whose performer works and that nothing has touched since."""
+        self._reads: dict[int, frozenset[str] | None] = {}
         self.unfinished = len(self.actions)
         self._deadlines: list[float] = []
         self._wake: Callable[[], None] = lambda: None
@@ -194,11 +220,19 @@ class PlanContext:
         heapq.heappush(self._deadlines, deadline)
 
     def next_deadline(self) -> float | None:
-        """The earliest deadline still in the future (past ones are dropped)."""
+        """The earliest deadline not yet taken by :meth:`pass_deadlines`."""
+        return self._deadlines[0] if self._deadlines else None
+
+    def pass_deadlines(self) -> None:
+        """Drop the deadlines that have come; resting branches get a tick (a timeout
+        of theirs may be among them)."""
         now = self.now()
+        passed = False
         while self._deadlines and self._deadlines[0] <= now:
             heapq.heappop(self._deadlines)
-        return self._deadlines[0] if self._deadlines else None
+            passed = True
+        if passed:
+            self._wake_resting(lambda _i: True)
 
     # ------------------------------------------------------------ knowledge
 
@@ -253,6 +287,49 @@ class PlanContext:
     def park(self, index: int) -> None:
         """Stop ticking a branch until one of its predecessors moves on."""
         self.active.discard(index)
+
+    def rest(self, rt: ActionRuntime) -> None:
+        """Stop ticking a standard branch whose performer is at work until the
+        performer ends (:meth:`resume`), a deadline passes or the knowledge its
+        over-all requirement reads changes (:meth:`knowledge_changed`)."""
+        if not rt.may_rest or self._over_all_reads(rt) is None:
+            return
+        self.active.discard(rt.index)
+        self.resting.add(rt.index)
+
+    def resume(self, index: int) -> None:
+        if index in self.resting:
+            self.resting.discard(index)
+            self.activate(index)
+
+    def knowledge_changed(self, change: KnowledgeChange) -> None:
+        """Give a tick to the resting branches whose over-all requirement reads
+        something ``change`` touched (all of them when objects came or went)."""
+        if not self.resting:
+            return
+        if change.added_instances or change.removed_instances:
+            self._wake_resting(lambda _i: True)
+            return
+        names = {a.predicate for a in change.added_facts}
+        names.update(a.predicate for a in change.removed_facts)
+        names.update(k[0] for k in change.changed_fluents)
+        names.update(k[0] for k in change.removed_fluents)
+        if names:
+            self._wake_resting(lambda i: not names.isdisjoint(self._reads[i] or ()))
+
+    def _wake_resting(self, touched: Callable[[int], bool]) -> None:
+        for index in [i for i in self.resting if touched(i)]:
+            self.resume(index)
+
+    def _over_all_reads(self, rt: ActionRuntime) -> frozenset[str] | None:
+        """Names the action's over-all requirement reads; None when that cannot be
+        told from the condition (a derived predicate)."""
+        if rt.index not in self._reads:
+            derived = frozenset(d.head.name for d in self.evaluator.domain.derived)
+            walker = _Reads(derived)
+            walker.walk(rt.ground.over_all)
+            self._reads[rt.index] = None if walker.derived else frozenset(walker.names)
+        return self._reads[rt.index]
 
     def _moved(self, rt: ActionRuntime) -> None:
         for i in self.dependents[rt.index]:
@@ -318,6 +395,7 @@ class PlanContext:
         rt.finished = True
         self.unfinished -= 1
         self.active.discard(rt.index)
+        self.resting.discard(rt.index)
         self._moved(rt)
         rec = rt.record
         self.progress = self.changed = True
@@ -349,6 +427,7 @@ class PlanContext:
         rt.finished = True
         self.unfinished -= 1
         self.active.discard(rt.index)
+        self.resting.discard(rt.index)
         self.changed = True
         if rt.start_reached and not rt.end_reached:
             rt.record.status = ActionStatus.CANCELLED

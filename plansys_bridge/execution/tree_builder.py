@@ -6,8 +6,10 @@ is done) with one branch per action; the graph's orderings live in each branch's
 dependencies allow (no hand-made nesting of sequences, which is where PlanSys2
 #155/#184/#331 went wrong). Unlike py_trees' ``Parallel`` it ticks only branches
 that can move: a branch parked in ``WaitForPredecessors`` is ticked again only when
-one of its predecessors starts, ends or stops, so a tick costs what is running, not
-the size of the plan.
+one of its predecessors starts, ends or stops, and a standard branch whose performer
+is at work only when the performer ends, a deadline passes or the knowledge its
+over-all requirement reads changes, so a tick costs what happened, not the size of
+the plan.
 
 Users may replace an action's subtree with a *template*: a callable that receives
 an :class:`ActionNodes` (a factory of the standard behaviours for that action) and
@@ -169,6 +171,7 @@ def build_tree(ctx: PlanContext) -> PlanRoot:
         nodes = ActionNodes(ctx, rt)
         template = ctx.options.template_for(rt.step.action)
         subtree = default_template(nodes) if template is None else template(nodes)
+        rt.may_rest = template is None
         if template is not None:
             _check_template(subtree, rt)
         branches.append(ActionBranch(ctx, rt, subtree))

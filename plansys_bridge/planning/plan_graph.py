@@ -223,7 +223,15 @@ class _Builder:
     def _ground(self) -> tuple[GroundAction, ...]:
         out: list[GroundAction] = []
         actions = {a.name: a for a in self.domain.actions}
+        # plans repeat actions (a robot going back and forth): ground each once, all
+        # in the same initial state, and share the (frozen) result
+        seen: dict[tuple[str, tuple[str, ...]], GroundAction] = {}
         for i, step in enumerate(self.steps):
+            key = (step.action, tuple(step.arguments))
+            known = seen.get(key)
+            if known is not None:
+                out.append(known)
+                continue
             action = actions.get(step.action)
             if action is None:
                 raise ExecutionError(
@@ -236,7 +244,8 @@ class _Builder:
                     f"{len(action.parameters)} arguments, got {len(step.arguments)}"
                 )
             try:
-                out.append(self.ev.ground_action(action, step.arguments, self.initial))
+                ground = seen[key] = self.ev.ground_action(action, step.arguments, self.initial)
+                out.append(ground)
             except Exception as exc:  # the evaluator's own error names the cause
                 raise ExecutionError(f"plan step {i} {step.text}: {exc}") from exc
         return tuple(out)
