@@ -36,6 +36,7 @@ from plansys_bridge.hub.messages import (
     ActionPerformerStatus,
     ExecutionType,
     Topics,
+    action_execution,
 )
 from plansys_bridge.hub.routing import client_keys
 
@@ -350,12 +351,8 @@ class ActionClient:
             self.requests_sent += 1
         self.hub.publish(
             Topics.ACTIONS_HUB,
-            ActionExecution(
-                type=kind,
-                node_id=node_id,
-                action=self.action,
-                arguments=self.arguments,
-                request_id=self.request_id,
+            action_execution(
+                kind, node_id, self.action, self.arguments, request_id=self.request_id
             ),
         )
 

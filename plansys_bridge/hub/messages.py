@@ -66,6 +66,40 @@ class ActionExecution:
     request_id: str = ""
 
 
+def action_execution(
+    kind: ExecutionType,
+    node_id: str,
+    action: str,
+    arguments: tuple[str, ...],
+    *,
+    success: bool = False,
+    completion: float = 0.0,
+    status: str = "",
+    bid: float | None = None,
+    request_id: str = "",
+) -> ActionExecution:
+    """``ActionExecution(...)`` at a third of the cost, for the auction's hot paths
+    (a REQUEST to 200 performers is answered by 200 RESPONSEs and 200 REJECTs): a
+    frozen dataclass's ``__init__`` sets each field through ``object.__setattr__``;
+    a message made here is new and not yet shared, so its fields are filled in at once."""
+    msg = _new(ActionExecution)
+    msg.__dict__.update(
+        type=kind,
+        node_id=node_id,
+        action=action,
+        arguments=arguments,
+        success=success,
+        completion=completion,
+        status=status,
+        bid=bid,
+        request_id=request_id,
+    )
+    return msg
+
+
+_new = object.__new__
+
+
 @dataclass(frozen=True)
 class BridgeActionExecution:
     """An :class:`ActionExecution` as ``plansys_bridge_msgs/msg/ActionExecution``.

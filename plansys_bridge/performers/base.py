@@ -37,6 +37,7 @@ from plansys_bridge.hub.messages import (
     ExecutionType,
     PerformerState,
     Topics,
+    action_execution,
 )
 from plansys_bridge.hub.routing import performer_keys
 from plansys_bridge.hub.transport import Subscription
@@ -264,7 +265,7 @@ class ActionPerformer(ABC):
 
     def _on_request(self, msg: ActionExecution) -> None:
         goal = ActionGoal(msg.action, tuple(msg.arguments), msg.request_id)
-        committed = self.committed
+        committed = self.committed if self._committed is not None else None
         if committed is not None:
             if committed == goal:
                 self._respond(goal, self._committed_bid)  # our RESPONSE may have been lost
@@ -283,7 +284,8 @@ class ActionPerformer(ABC):
             return
         self._committed = goal
         self._committed_bid = cost
-        self._commit_deadline = asyncio.get_running_loop().time() + self.commit_timeout
+        loop = self._loop or asyncio.get_running_loop()
+        self._commit_deadline = loop.time() + self.commit_timeout
         self._respond(goal, cost)
 
     def _respond(self, goal: ActionGoal, cost: float | None) -> None:
@@ -365,11 +367,11 @@ class ActionPerformer(ABC):
     ) -> None:
         self._publish(
             Topics.ACTIONS_HUB,
-            ActionExecution(
-                type=kind,
-                node_id=self.node_name,
-                action=goal.action,
-                arguments=goal.arguments,
+            action_execution(
+                kind,
+                self.node_name,
+                goal.action,
+                goal.arguments,
                 success=success,
                 completion=completion,
                 status=status,

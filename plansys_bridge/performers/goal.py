@@ -61,6 +61,8 @@ def arguments_match(specialized: Sequence[str], arguments: Sequence[str]) -> boo
     No specialised arguments matches every call. Lengths may differ (PlanSys2 only
     warns): the positions both have are compared.
     """
+    if not specialized:
+        return True
     return all(s == "" or s == a for s, a in zip(specialized, arguments, strict=False))
 
 

@@ -4,8 +4,11 @@ heartbeats feed one liveness table, subscribers without keys still hear everythi
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 from collections import Counter
 from typing import Any
+
+import pytest
 
 from plansys_bridge.clock import VirtualClock, run
 from plansys_bridge.hub.auction import ActionClient, AuctionPolicy
@@ -16,6 +19,7 @@ from plansys_bridge.hub.messages import (
     ExecutionType,
     PerformerState,
     Topics,
+    action_execution,
 )
 from plansys_bridge.hub.routing import client_keys, performer_keys
 from plansys_bridge.hub.transport import InProcessTransport
@@ -210,3 +214,34 @@ def test_heartbeats_of_an_unknown_sender_are_ignored_by_the_table() -> None:
         return table.heartbeats
 
     assert run(main(), clock) == 1
+
+
+def test_the_fast_message_factory_makes_the_same_message_as_the_dataclass() -> None:
+    fast = action_execution(
+        ExecutionType.FINISH,
+        "n1",
+        "move",
+        ("r", "a"),
+        success=True,
+        completion=0.5,
+        status="half",
+        bid=2.5,
+        request_id="p/0/3",
+    )
+    slow = ActionExecution(
+        type=ExecutionType.FINISH,
+        node_id="n1",
+        action="move",
+        arguments=("r", "a"),
+        success=True,
+        completion=0.5,
+        status="half",
+        bid=2.5,
+        request_id="p/0/3",
+    )
+    assert fast == slow and hash(fast) == hash(slow) and repr(fast) == repr(slow)
+    assert action_execution(ExecutionType.REQUEST, "", "move", ()) == ActionExecution(
+        type=ExecutionType.REQUEST, node_id="", action="move"
+    )
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        fast.status = "changed"  # type: ignore[misc]
