@@ -1,9 +1,9 @@
 """The LALR loop: lark's parse table and callbacks, driven with our lexer in one pass.
 
 Kept because ``benchmarks/bench_parse.py`` shows what it is worth: with lark's parse
-loop in its place (our lexer kept), the same pipeline takes 1.5x as long on a
-generated problem of 5000 objects (443 ms against 293 ms) and 1.3x as long on
-PlanSys2's corpus (126 ms against 101 ms).
+loop in its place (our lexer kept), the same pipeline takes 1.1x to 1.5x as long on a
+generated problem of 5000 objects (320-443 ms against 293-296 ms, two runs) and 1.2x
+to 1.3x as long on PlanSys2's corpus (126-143 ms against 101-118 ms).
 
 Why: after the lexer (lexer.py) was made fast, lark's per-token parser step was
 the largest cost on big problems, mostly generic bookkeeping (attribute lookups,

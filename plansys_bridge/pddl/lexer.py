@@ -2,9 +2,10 @@
 
 Kept because ``benchmarks/bench_parse.py`` shows what it is worth. Under lark's
 own parse loop, swapping this lexer for lark's contextual one makes the whole
-parse 1.9x as slow on a generated problem of 5000 objects (822 ms against 443 ms)
-and 1.8x on PlanSys2's corpus (224 ms against 126 ms for its 66 files); with the
-driver (driver.py) as well, ours takes 293 ms and 101 ms.
+parse 1.9x to 2.6x as slow on a generated problem of 5000 objects (822-828 ms
+against 320-443 ms, two runs) and 1.5x to 1.8x on PlanSys2's corpus (214-224 ms
+against 126-143 ms for its 66 files); with the driver (driver.py) as well, ours
+takes 293-296 ms and 101-118 ms.
 
 Why not lark's own contextual lexer: on large problems (thousands of facts) the
 parse time was dominated by lexing, one regex match per token *plus* one per
