@@ -2,7 +2,7 @@
 
 ``systemctl stop``, ``docker stop`` and ``kill`` send SIGTERM, whose default ends the
 process on the spot: a mission's actions are not cancelled and its performers not
-stopped (no zero-velocity command to a CAN base, no BRAKE for a copter). While a
+stopped (no zero-velocity command to a CAN base, no safe mode for a copter). While a
 command runs, SIGTERM is handed to the SIGINT handler in force (asyncio's, which
 cancels the mission so that it shuts down in order), and the command then ends with
 ``terminated`` and exit status 143 instead of 130. Only the first SIGTERM counts: a

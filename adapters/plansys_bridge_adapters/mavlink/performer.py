@@ -43,7 +43,7 @@ from .double import VehicleDouble
 from .errors import LinkError, MavlinkError, VehicleFault
 from .geo import GeoPoint, distance_3d_m, distance_m
 from .headway import Headway
-from .safety import make_safe, make_safe_when_heard, safe_mode_for, stop_safely
+from .safety import PUTS_DOWN, make_safe, make_safe_when_heard, safe_mode_for, stop_safely
 from .settings import (
     SETTINGS_KEYS,
     Command,
@@ -98,6 +98,9 @@ class MavlinkPerformer(ActionPerformer):
         self.telemetry: TelemetryPublisher | None = None
         self._last_feedback = -1e9
         self._recovery: asyncio.Task[str | None] | None = None
+        self._put_down = False
+        """The safe mode (LAND, RTL) took the copter down while the plan has it in the
+        air: the next flight takes off again, so a replan after a cancel still flies."""
 
     # -------------------------------------------------------------- lifecycle
     def connects_to(self) -> str:
@@ -174,7 +177,7 @@ class MavlinkPerformer(ActionPerformer):
     async def execute(self, goal: ActionGoal) -> str | None:
         cmd = self.commands[goal.action]
         self._last_feedback = -1e9
-        await self._stop_recovery()
+        self._note_safe(await self._stop_recovery())
         vehicle = await self._link()
         if vehicle.failsafe is not None and vehicle.telemetry.armed:
             raise ActionFailed(
@@ -188,7 +191,7 @@ class MavlinkPerformer(ActionPerformer):
             return str(await vehicle.supervise(run(vehicle, goal, cmd)))
         except MavlinkError as exc:
             if not (isinstance(exc, VehicleFault) and exc.took_over):
-                mode = await make_safe(vehicle, self.settings.safe_mode)
+                mode = self._note_safe(await make_safe(vehicle, self.settings.safe_mode))
                 if mode is None and isinstance(exc, LinkError):
                     self._recover_when_heard(vehicle)
             raise ActionFailed(str(exc)) from exc
@@ -197,8 +200,8 @@ class MavlinkPerformer(ActionPerformer):
             vehicle.expect_armed = False
 
     async def on_cancel(self, goal: ActionGoal) -> None:
-        """The safe mode (``safe_mode``: copter BRAKE by default, LOITER if BRAKE is
-        refused, or LAND/RTL/...; rover HOLD, ...)."""
+        """The safe mode (``safe_mode``: copter LAND by default, or RTL/BRAKE/...,
+        LOITER if BRAKE is refused; rover HOLD, ...)."""
         v = self.vehicle
         if v is None or not v.connected:
             return
@@ -209,6 +212,7 @@ class MavlinkPerformer(ActionPerformer):
         for mode in modes:
             try:
                 await v.set_mode(mode)
+                self._note_safe(mode)
                 return
             except MavlinkError as exc:
                 log.warning("%s: cancel could not switch to %s: %s", v.url, mode, exc)
@@ -221,12 +225,21 @@ class MavlinkPerformer(ActionPerformer):
             name=f"{self.node_name}: safe mode when the link is back",
         )
 
-    async def _stop_recovery(self) -> None:
+    async def _stop_recovery(self) -> str | None:
+        """Cancel the pending recovery; the safe mode it set, if it got to set one."""
         task, self._recovery = self._recovery, None
-        if task is not None and not task.done():
+        if task is None:
+            return None
+        if not task.done():
             task.cancel()
-        if task is not None:
-            await asyncio.gather(task, return_exceptions=True)
+        [mode] = await asyncio.gather(task, return_exceptions=True)
+        return mode if isinstance(mode, str) else None
+
+    def _note_safe(self, mode: str | None) -> str | None:
+        """Remember a safe mode that lands a copter (see ``_put_down``); returns ``mode``."""
+        if mode in PUTS_DOWN and self.vehicle is not None and self.vehicle.model == "copter":
+            self._put_down = True
+        return mode
 
     async def _link(self) -> MavlinkVehicle:
         v = self.vehicle
@@ -297,10 +310,11 @@ class MavlinkPerformer(ActionPerformer):
         name = goal.arguments[cmd.target_arg]
         if v.model == "copter":
             on_ground = not v.telemetry.armed or pos.alt < self.settings.altitude_tolerance
-            if on_ground and cmd.takeoff:
+            if on_ground and (cmd.takeoff or self._put_down):
                 alt = cmd.altitude if cmd.altitude is not None else self.settings.cruise_altitude
                 await self._do_takeoff(v, goal, Command("takeoff", altitude=alt))
                 on_ground = False
+            self._put_down = False
             if on_ground:
                 raise ActionFailed(
                     f"{v.url}: the copter is on the ground; take off before flying to {name}"
@@ -345,6 +359,7 @@ class MavlinkPerformer(ActionPerformer):
             await v.wait_message(0.2)
 
     async def _do_land(self, v: MavlinkVehicle, goal: ActionGoal, cmd: Command) -> str:
+        self._put_down = False
         if v.model != "copter":
             await v.set_mode("HOLD")
             if v.telemetry.armed:

@@ -2,12 +2,15 @@
 back after it was lost, and when its performer stops (mission end, abort, Ctrl-C or
 SIGTERM of ``plansys-bridge run``).
 
-The safe mode is the performer's ``safe_mode`` (copter BRAKE by default, or LAND,
-RTL, LOITER, SMART_RTL; rover HOLD, ...). The rule: the adapter only makes safe a
-vehicle it still controls, that is one in GUIDED, the mode the adapter flies in. A
-vehicle that changed mode on its own (a failsafe: RTL, LAND, HOLD) or was taken over
-by a pilot or another ground station is left alone: ArduPilot or that person
-already decided, and switching modes back would fight them.
+The safe mode is the performer's ``safe_mode`` (copter LAND by default, or RTL,
+SMART_RTL, BRAKE, LOITER; rover HOLD, ...). A copter lands by default because
+whatever stops the adapter may also keep it from coming back (SIGTERM, an abort, a
+lost link): a hovering copter would stay up until its battery failsafe.
+
+The rule: the adapter only makes safe a vehicle it still controls, that is one in
+GUIDED, the mode the adapter flies in. A vehicle that changed mode on its own (a
+failsafe: RTL, LAND, HOLD) or was taken over by a pilot or another ground station
+is left alone: ArduPilot or that person already decided, and switching modes back would fight them.
 """
 
 from __future__ import annotations
@@ -22,10 +25,12 @@ from .vehicle import MavlinkVehicle
 log = logging.getLogger(__name__)
 
 SAFE_MODES: dict[Model, tuple[str, ...]] = {
-    "copter": ("BRAKE", "LAND", "RTL", "LOITER", "SMART_RTL"),
+    "copter": ("LAND", "RTL", "SMART_RTL", "BRAKE", "LOITER"),
     "rover": ("HOLD", "RTL", "LOITER", "SMART_RTL"),
 }
 """Modes ``safe_mode`` may name, the first being the default."""
+PUTS_DOWN = frozenset({"LAND", "RTL", "SMART_RTL"})
+"""Copter safe modes that end on the ground: a later flight has to take off again."""
 FRESH_HEARTBEAT = 1.2
 """Seconds to wait for a HEARTBEAT after a failure (ArduPilot sends one a second)."""
 SAFE_TIMEOUT = 1.5

@@ -108,7 +108,7 @@ class MavlinkSettings:
     telemetry_hz: Mapping[str, float] = field(default_factory=lambda: dict(DEFAULT_TELEMETRY_HZ))
     safe_mode: str | None = None
     """Mode for a vehicle still in GUIDED after a failed action or at the end
-    (copter BRAKE, LAND, RTL, ...; rover HOLD, ...); None: the model's default."""
+    (copter LAND, RTL, BRAKE, ...; rover HOLD, ...); None: the model's default."""
     disarm_on_stop: bool = True
     """Disarm a vehicle left armed on the ground when the performer stops."""
 

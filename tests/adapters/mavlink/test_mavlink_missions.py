@@ -130,14 +130,14 @@ def test_fault_mid_mission_fails_cleanly_with_the_reason(
     assert message.startswith(f"{url}: {reason}")
 
 
-def test_low_battery_halts_the_flight_and_the_copter_brakes() -> None:
+def test_low_battery_halts_the_flight_and_the_copter_lands() -> None:
     # telemetry puts (battery_low uav1) into the knowledge; fly needs it false over
-    # all, so the executor halts the flight (CANCEL: the copter brakes) and replans
+    # all, so the executor halts the flight (CANCEL: the copter lands) and replans
     states: list[Mapping[str, Any]] = []
 
     def low_battery(double: VehicleDouble) -> None:
         double.set_battery(15.0)
-        double.wait_for(lambda s: s["mode"] == "BRAKE", timeout=10)
+        double.wait_for(lambda s: s["mode"] == "LAND", timeout=10)
         states.append(double.state())
 
     _, report = copter_mission_with_fault(low_battery, max_replans=1)
@@ -150,7 +150,7 @@ def test_low_battery_halts_the_flight_and_the_copter_brakes() -> None:
         )
     ]
     [state] = states
-    assert state["mode"] == "BRAKE" and not state["landed"]
+    assert state["mode"] == "LAND"
     assert 20 < state["north"] < 60
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import asyncio
 import itertools
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -179,7 +179,7 @@ def test_wind_the_copter_cannot_fly_against_fails_the_action(copter: VehicleDoub
     assert not flight.success
     assert flight.status.startswith(f"{copter.url}: no headway to north_field: ")
     assert "for 20 s of vehicle time" in flight.status, flight.status
-    assert copter.state()["mode"] == "BRAKE"  # the configured safe mode (default)
+    assert copter.state()["mode"] == "LAND"  # the safe mode (default)
 
 
 def test_lost_heartbeat_fails_the_action(copter: VehicleDouble) -> None:
@@ -215,7 +215,8 @@ def test_takeoff_whose_ack_is_lost_still_succeeds(copter: VehicleDouble) -> None
     assert outcome.success, outcome.status
     takeoffs = [c for c in copter.sim.commands_seen if c == ml.MAV_CMD_NAV_TAKEOFF]
     assert len(takeoffs) == 2
-    assert copter.state()["alt"] >= 9.0
+    assert outcome.status.startswith("airborne at ")  # 10 m, within the tolerance
+    assert float(outcome.status.split()[2]) >= 9.0
 
 
 def test_rover_stop_whose_disarm_ack_is_lost_still_succeeds(rover: VehicleDouble) -> None:
@@ -296,9 +297,11 @@ def test_flying_before_takeoff_is_refused(copter: VehicleDouble) -> None:
 
 @pytest.mark.parametrize(
     ("model", "vehicle", "action", "hold_mode"),
-    [("copter", "uav1", "fly", "BRAKE"), ("rover", "ugv1", "drive", "HOLD")],
+    [("copter", "uav1", "fly", "LAND"), ("rover", "ugv1", "drive", "HOLD")],
 )
-def test_cancel_holds_position(model: str, vehicle: str, action: str, hold_mode: str) -> None:
+def test_cancel_stops_in_the_default_safe_mode(
+    model: str, vehicle: str, action: str, hold_mode: str
+) -> None:
     with VehicleDouble(model, speedup=SPEEDUP, ekf_delay=2.0) as double:  # type: ignore[arg-type]
         out: list[ActionOutcome] = []
 
@@ -321,6 +324,33 @@ def test_cancel_holds_position(model: str, vehicle: str, action: str, hold_mode:
         state = double.state()
         assert state["mode"] == hold_mode
         assert 5 <= state["north"] < 55
+
+
+def test_a_flight_after_the_safe_mode_landed_the_copter_takes_off_again() -> None:
+    # a cancel lands the copter (default safe mode) while the plan still has it in the
+    # air: the replanned flight takes off again instead of failing on the ground
+    with VehicleDouble("copter", speedup=SPEEDUP, ekf_delay=2.0) as double:
+        out: list[ActionOutcome] = []
+
+        async def body(hub: Hub, performers: list[MavlinkPerformer]) -> None:
+            assert (await act(hub, "takeoff", "uav1", "pad")).success
+            client = ActionClient(hub, "fly", ("uav1", "pad", "north_field"), policy=POLICY)
+            task = asyncio.ensure_future(client.run())
+            while double.state()["north"] < 5:
+                await asyncio.sleep(0.01)
+            client.cancel()
+            assert (await task).cancelled
+            while not double.state()["landed"] or double.state()["armed"]:
+                await asyncio.sleep(0.05)
+            out.append(await act(hub, "fly", "uav1", "pad", "north_field"))
+            states.append(double.state())  # before the performer stops (and lands it)
+
+        states: list[Mapping[str, Any]] = []
+        run_with([("uav1", double)], body)
+        assert out[0].success, out[0].status
+        [state] = states
+        assert state["armed"] and not state["landed"] and state["mode"] == "GUIDED"
+        assert state["north"] > 40
 
 
 def test_battery_goes_into_the_knowledge(copter: VehicleDouble) -> None:

@@ -1,6 +1,6 @@
 """The vehicle's safe mode on every way an action or a mission can end early.
 
-``safe_mode`` (copter BRAKE by default, or LAND / RTL ...; rover HOLD) is applied on
+``safe_mode`` (copter LAND by default, or RTL / BRAKE ...; rover HOLD) is applied on
 a cancel from the executor, on a failed action, when the mission aborts, when the
 link comes back after it was lost mid-action, and when ``plansys-bridge run`` is
 stopped by SIGINT or SIGTERM (a real signal to a real child process flying the
@@ -51,7 +51,7 @@ def _with_performer(double: VehicleDouble, body: Any, **extra: Any) -> None:
     asyncio.run(main())
 
 
-@pytest.mark.parametrize("mode", ["LAND", "RTL"])
+@pytest.mark.parametrize("mode", ["LAND", "RTL", "BRAKE"])
 def test_cancel_puts_the_copter_in_its_safe_mode(mode: str) -> None:
     with VehicleDouble("copter", speedup=SPEEDUP, ekf_delay=2.0, cruise_speed=2.0) as double:
 
@@ -84,12 +84,12 @@ def test_lost_link_makes_the_copter_safe_once_it_is_heard_again() -> None:
             while double.state()["mode"] != "LAND":
                 await asyncio.sleep(0.05)
 
-        _with_performer(double, body, safe_mode="LAND")
+        _with_performer(double, body)  # the default safe mode: LAND
         assert not outcome[0].success and "no HEARTBEAT" in outcome[0].status
         assert double.state()["mode"] == "LAND"
 
 
-def _mission(double: VehicleDouble, tmp_path: Path, safe_mode: str) -> Path:
+def _mission(double: VehicleDouble, tmp_path: Path, safe_mode: str | None) -> Path:
     data = yaml.safe_load((CONFIGS / "mavlink_copter.yaml").read_text())
     for key in ("domain", "problem"):
         data[key] = str(CONFIGS / data[key])
@@ -97,10 +97,12 @@ def _mission(double: VehicleDouble, tmp_path: Path, safe_mode: str) -> Path:
     del entry["double"]
     entry.update(
         url=double.url,
-        safe_mode=safe_mode,
         locations=str(CONFIGS / entry["locations"]),
         timeouts={"heartbeat": 2.0, "command": 1.0, "ekf": 60, "arm": 30, "action": 120},
     )
+    entry.pop("safe_mode", None)  # None: the default
+    if safe_mode is not None:
+        entry["safe_mode"] = safe_mode
     path = tmp_path / "mission.yaml"
     path.write_text(yaml.safe_dump(data, sort_keys=False))
     return path
@@ -145,8 +147,8 @@ def test_a_signal_to_run_leaves_the_copter_in_its_safe_mode(
 @pytest.mark.sitl
 @pytest.mark.parametrize(
     ("sig", "code", "mode"),
-    [(signal.SIGTERM, 143, "LAND"), (signal.SIGINT, 130, "RTL")],
-    ids=["SIGTERM-LAND", "SIGINT-RTL"],
+    [(signal.SIGTERM, 143, "LAND"), (signal.SIGINT, 130, "RTL"), (signal.SIGTERM, 143, "BRAKE")],
+    ids=["SIGTERM-LAND", "SIGINT-RTL", "SIGTERM-BRAKE"],
 )
 def test_a_signal_to_run_leaves_sitl_in_its_safe_mode(
     sitl: Sitl, tmp_path: Path, sig: signal.Signals, code: int, mode: str
@@ -200,7 +202,7 @@ def test_a_repeated_sigterm_does_not_cut_the_safe_stop_short(tmp_path: Path) -> 
     # supervisors and scripts may send SIGTERM more than once; SIGKILL is the way to force
     with VehicleDouble("copter", speedup=5, ekf_delay=2.0, cruise_speed=2.0) as double:
         proc = subprocess.Popen(
-            [*cli(), "run", str(_mission(double, tmp_path, "LAND"))],
+            [*cli(), "run", str(_mission(double, tmp_path, None))],  # default: LAND
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
             stdin=subprocess.DEVNULL,

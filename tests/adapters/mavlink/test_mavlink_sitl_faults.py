@@ -205,4 +205,4 @@ def test_wind_stronger_than_the_copter(sitl: Sitl, tmp_path: Path) -> None:
         shown = gcs.stalled_at(north_field, Timeouts().stall, leg["start"])
         assert shown is not None, gcs.seen.track[-3:]
         assert end - shown <= REPORT_WITHIN, (end - shown, describe(report))
-        assert_left_safe(gcs, ("BRAKE",))
+        assert_left_safe(gcs, ("LAND",))  # the default safe mode
