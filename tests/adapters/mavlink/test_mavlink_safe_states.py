@@ -167,7 +167,7 @@ def test_a_signal_to_run_leaves_sitl_in_its_safe_mode(
             assert gcs.seen.modes[-1][1] == "GUIDED"
             proc.send_signal(sig)
             _out, err = proc.communicate(timeout=60)
-            assert proc.returncode == code, err
+            assert proc.returncode == code, err + _out
             gcs.wait(lambda s: s.modes[-1][1] == mode, 20, f"mode {mode}")
     finally:
         if proc.poll() is None:
