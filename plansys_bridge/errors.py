@@ -81,13 +81,29 @@ class HubError(PlansysBridgeError):
 class ConfigError(PlansysBridgeError):
     """A configuration file is missing a key, has a typo, or a wrong value.
 
-    ``key`` is the dotted path of the offending entry (``performers[2].url``).
+    ``key`` is the dotted path of the offending entry (``performers[2].url``);
+    ``line`` and ``column`` (1-based) where it is in ``file``, when known, make the
+    message read like a compiler's: ``mission.yaml:12:7: performers[2].url: ...``.
     """
 
-    def __init__(self, message: str, key: str | None = None, file: str | None = None) -> None:
+    def __init__(
+        self,
+        message: str,
+        key: str | None = None,
+        file: str | None = None,
+        line: int | None = None,
+        column: int | None = None,
+    ) -> None:
         self.key = key
         self.file = file
-        where = ":".join(p for p in (file, key) if p)
+        self.line = line
+        self.column = column
+        self.reason = message
+        """The message without the place."""
+        if file and line:
+            where = f"{file}:{line}:{column or 1}: {key}" if key else f"{file}:{line}:{column or 1}"
+        else:
+            where = ":".join(p for p in (file, key) if p)
         super().__init__(f"{where}: {message}" if where else message)
 
 

@@ -1,27 +1,52 @@
 """Mission files: the YAML a user writes to run a mission with ``plansys-bridge run``.
 
 The file is validated completely on load, before any performer starts or any
-hardware is touched: a typo in a key is an error naming that key
-(``mission.yaml: performers[1].acions: unknown key``), never a silently ignored
-setting. Performer entries are checked twice: the common keys here, the
-kind-specific settings by the performer plugin's own ``from_config``.
+hardware is touched: a typo in a key is an error naming the place and the key
+(``mission.yaml:9:5: performers[1].acions: unknown key``), never a silently ignored
+setting. The sections that belong to a plugin (each performer entry, the
+transport) are validated through the plugin's own ``Settings`` model
+(:mod:`plansys_bridge.plugins`); what needs files or the knowledge is checked when
+the performers are built, still before any of them connects.
 Relative paths are resolved against the folder of the YAML file.
 """
 
 from __future__ import annotations
 
-import contextlib
-import ipaddress
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
-import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    PrivateAttr,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 from plansys_bridge.errors import ConfigError, PluginError
 from plansys_bridge.execution.options import ExecutorOptions
 from plansys_bridge.planning.planner import Planner
-from plansys_bridge.textfile import TextFileError, read_text
+from plansys_bridge.plugins import key_path, validate_settings, validation_message
+from plansys_bridge.yaml_files import (
+    MAX_YAML_DEPTH,
+    KeyPositions,
+    load_yaml_document,
+    load_yaml_file,
+)
+
+if TYPE_CHECKING:
+    from plansys_bridge.hub.transport_kinds import TransportKind
+
+__all__ = [
+    "MAX_YAML_DEPTH",
+    "MissionConfig",
+    "load_mission",
+    "load_yaml_file",
+    "make_planner",
+    "mission_from_dict",
+]
 
 
 class _Strict(BaseModel):
@@ -44,53 +69,19 @@ class ClockConfig(_Strict):
         return self
 
 
-class TransportConfig(_Strict):
-    """``inprocess``: one process; ``dds``: Cyclone DDS, so the performers may run in
-    other processes (``plansys-bridge performers MISSION.yaml``) and on other hosts.
+class TransportConfig(BaseModel):
+    """Which transport carries the hub's messages, by the name of its plugin
+    (:mod:`plansys_bridge.hub.transport_kinds`): ``inprocess`` (one process, the
+    default), ``dds`` (Cyclone DDS, so the performers may run in other processes,
+    ``plansys-bridge performers MISSION.yaml``, and on other hosts) or one a package
+    registers. The other keys are the kind's settings, validated by its ``Settings``."""
 
-    DDS stays on 127.0.0.1 unless told otherwise: ``interfaces`` (addresses or names)
-    and ``peers`` (hosts to discover by unicast) and ``multicast`` describe a real
-    network; ``config`` names a Cyclone XML file instead (what ``CYCLONEDDS_URI`` would
-    hold), for anything beyond that.
-    """
+    model_config = ConfigDict(extra="allow", frozen=True)
+    kind: str = "inprocess"
 
-    kind: Literal["inprocess", "dds"] = "inprocess"
-    domain_id: int = Field(0, ge=0, le=232)
-    """DDS domain; processes of one mission share it, other runs pick another."""
-    peer_timeout: float = Field(10.0, gt=0)
-    """With remote performers: seconds to wait for a heartbeat from each of them."""
-    interfaces: list[str] = Field(default_factory=lambda: ["127.0.0.1"], min_length=1)
-    """Network interfaces DDS uses, by address or name (default: loopback only)."""
-    peers: list[str] | None = None
-    """Hosts (address or name, optionally ``:port``) found by unicast discovery; by
-    default the interfaces' own addresses, so processes of this machine meet."""
-    multicast: bool = False
-    """Discover and send by multicast on the interfaces (off: unicast to ``peers``)."""
-    config: str | None = None
-    """A Cyclone DDS XML file (relative to the mission file) used instead of the above."""
-
-    @model_validator(mode="after")
-    def _dds_settings_need_dds(self) -> TransportConfig:
-        dds_only = {"domain_id", "peer_timeout", "interfaces", "peers", "multicast", "config"}
-        extra = sorted(self.model_fields_set & dds_only)
-        if self.kind != "dds" and extra:
-            raise ValueError(f"{', '.join(extra)} applies to the dds transport only")
-        network = sorted(self.model_fields_set & {"interfaces", "peers", "multicast"})
-        if self.config is not None and network:
-            raise ValueError(
-                f"config (a Cyclone XML file) replaces {', '.join(network)}: give one or the other"
-            )
-        return self
-
-    def peer_list(self) -> list[str]:
-        """``peers``, or the interfaces that are addresses when ``peers`` is not given."""
-        if self.peers is not None:
-            return list(self.peers)
-        found = []
-        for value in self.interfaces:
-            with contextlib.suppress(ValueError):
-                found.append(str(ipaddress.ip_address(value)))
-        return found
+    def settings(self) -> dict[str, Any]:
+        """The keys besides ``kind``, for the kind's ``Settings`` model."""
+        return dict(self.model_extra or {})
 
 
 class PlannerConfig(_Strict):
@@ -201,15 +192,6 @@ class MissionConfig(_Strict):
         return [value] if isinstance(value, str) else value
 
     @model_validator(mode="after")
-    def _dds_needs_wall_clock(self) -> MissionConfig:
-        if self.transport.kind == "dds" and self.clock.kind == "virtual":
-            raise ValueError(
-                "the dds transport needs the wall clock (the virtual clock would expire "
-                "protocol timeouts while messages travel between processes)"
-            )
-        return self
-
-    @model_validator(mode="after")
     def _has_goal(self) -> MissionConfig:
         if self.problem is None and self.goal is None:
             raise ValueError("a mission needs a problem file or a goal")
@@ -218,6 +200,27 @@ class MissionConfig(_Strict):
         if dupes:
             raise ValueError(f"performer names must be unique, repeated: {', '.join(dupes)}")
         return self
+
+    _positions: KeyPositions | None = PrivateAttr(default=None)
+    _transport: TransportKind | None = PrivateAttr(default=None)
+
+    def error(self, message: str, key: str | None = None) -> ConfigError:
+        """A ConfigError about ``key`` of this mission file, with its line and column."""
+        return self.locate(ConfigError(message, key=key))
+
+    def locate(self, exc: ConfigError) -> ConfigError:
+        """``exc`` naming this file and, when known, the line and column of its key
+        (unchanged when it is about another file)."""
+        positions = self._positions or KeyPositions(self.source)
+        if exc.file is None:
+            exc = ConfigError(exc.reason, key=exc.key, file=self.source)
+        return positions.relocate(exc)
+
+    def transport_kind(self) -> TransportKind:
+        """The ``transport:`` plugin with its settings validated."""
+        if self._transport is None:
+            self._transport = _transport_kind(self)
+        return self._transport
 
     def resolve(self, path: str) -> Path:
         """A path from the file, relative to the file's folder."""
@@ -259,16 +262,6 @@ def make_planner(mission: MissionConfig) -> Planner:
         raise ConfigError(message, key=f"planner.{key}".rstrip("."), file=mission.source) from exc
 
 
-def _key_path(loc: tuple[int | str, ...]) -> str:
-    out = ""
-    for part in loc:
-        if isinstance(part, int):
-            out += f"[{part}]"
-        else:
-            out += ("." if out else "") + str(part)
-    return out
-
-
 def _find_nul(value: Any, where: tuple[int | str, ...]) -> tuple[tuple[int | str, ...], str] | None:
     """The first string (key or value) holding a NUL byte, and where it is.
 
@@ -291,9 +284,26 @@ def _find_nul(value: Any, where: tuple[int | str, ...]) -> tuple[tuple[int | str
 
 
 def mission_from_dict(
-    data: Any, *, source: str = "<mission>", base_dir: Path | None = None
+    data: Any,
+    *,
+    source: str = "<mission>",
+    base_dir: Path | None = None,
+    positions: KeyPositions | None = None,
 ) -> MissionConfig:
-    """Validate a mission mapping; errors name the first offending key."""
+    """Validate a mission mapping, every plugin's section through the plugin's own
+    ``Settings``; errors name the first offending key (with its line and column
+    when ``positions`` says where the keys are)."""
+    where = positions or KeyPositions(source)
+    try:
+        mission = _validate(data, source, base_dir or Path("."))
+        mission._positions = where
+        _check_plugins(mission)
+    except ConfigError as exc:
+        raise where.relocate(exc) from exc
+    return mission
+
+
+def _validate(data: Any, source: str, base_dir: Path) -> MissionConfig:
     if not isinstance(data, dict):
         raise ConfigError("a mission file must be a mapping of keys", file=source)
     for reserved in ("base_dir", "source"):
@@ -301,21 +311,19 @@ def mission_from_dict(
             raise ConfigError("unknown key", key=reserved, file=source)
     nul = _find_nul(data, ())
     if nul is not None:
-        where, text = nul
+        at, text = nul
         raise ConfigError(
             f"a NUL byte in {text!r} (no file name or setting holds one)",
-            key=_key_path(where) or None,
+            key=key_path(at) or None,
             file=source,
         )
     try:
-        mission = MissionConfig.model_validate(
-            {**data, "base_dir": base_dir or Path("."), "source": source}
-        )
+        mission = MissionConfig.model_validate({**data, "base_dir": base_dir, "source": source})
     except ValidationError as exc:
         err = exc.errors()[0]
-        msg = "unknown key" if err["type"] == "extra_forbidden" else err["msg"]
-        msg = msg.removeprefix("Value error, ")
-        raise ConfigError(msg, key=_key_path(err["loc"]) or None, file=source) from exc
+        raise ConfigError(
+            validation_message(err), key=key_path(err["loc"]) or None, file=source
+        ) from exc
     mission.executor_options()  # the executor's own checks, errors naming the key
     if mission.planner != PlannerConfig():
         make_planner(mission)  # unknown solvers and options are errors now, not at planning
@@ -330,100 +338,75 @@ def mission_from_dict(
     return mission
 
 
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """YAML keeps the last of two equal keys; in a mission file the first is then a
-    setting silently ignored (two ``performers:`` lists, two ``goal:``), so it is an error."""
+def _check_plugins(mission: MissionConfig) -> None:
+    """The transport's and each performer's settings, through the plugin's model.
 
-    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
-        seen: set[Any] = set()
-        for key_node, _value in node.value:
-            if key_node.tag == "tag:yaml.org,2002:merge":
-                continue  # ``<<: *anchor``: its keys may be overridden
-            key = self.construct_object(key_node, deep=deep)
-            if not isinstance(key, str | int | float | bool):
-                continue  # an unhashable key: the base class reports it
-            if key in seen:
-                raise yaml.constructor.ConstructorError(
-                    None, None, f"duplicate key {key!r}", key_node.start_mark
-                )
-            seen.add(key)
-        return super().construct_mapping(node, deep=deep)
-
-
-MAX_YAML_DEPTH = 100
-"""Deeper nesting is refused before PyYAML builds it (its recursive composer would
-end in a RecursionError; no settings file needs more than a handful of levels)."""
-
-
-def _check_depth(text: str, path: Path, key: str | None) -> None:
-    """Walk the YAML events (PyYAML's parser is not recursive) and refuse nesting
-    deeper than MAX_YAML_DEPTH, naming the place and the key path that leads there."""
-    # each open container: [is_mapping, next_is_key, current key/index]
-    stack: list[list[Any]] = []
-    for event in yaml.parse(text, Loader=yaml.SafeLoader):
-        if isinstance(event, yaml.CollectionEndEvent):
-            stack.pop()
-            _advance(stack)
-            continue
-        if not isinstance(event, yaml.NodeEvent):
-            continue
-        top = stack[-1] if stack else None
-        if top is not None and top[0] and top[1]:  # a mapping key
-            value = getattr(event, "value", None)
-            top[2] = value if isinstance(value, str) else "?"
-            top[1] = False
-            if isinstance(event, yaml.CollectionStartEvent):
-                stack.append([isinstance(event, yaml.MappingStartEvent), True, 0])
-            continue
-        if isinstance(event, yaml.CollectionStartEvent):
-            if len(stack) >= MAX_YAML_DEPTH:
-                mark = event.start_mark
-                where = _key_path(tuple(level[2] for level in stack[:4])) + "..."
-                raise ConfigError(
-                    f"nested more than {MAX_YAML_DEPTH} levels deep",
-                    key=f"{key}: {where}" if key else where,
-                    file=f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else str(path),
-                )
-            stack.append([isinstance(event, yaml.MappingStartEvent), True, 0])
-            continue
-        _advance(stack)
-
-
-def _advance(stack: list[list[Any]]) -> None:
-    """A value was completed in the innermost container: expect the next key or item."""
-    if not stack:
-        return
-    top = stack[-1]
-    if top[0]:
-        top[1] = True
-    else:
-        top[2] += 1
-
-
-def load_yaml_file(path: str | Path, what: str = "file", key: str | None = None) -> Any:
-    """Read a YAML file a user names (mission, locations, segments, ...).
-
-    Unreadable or binary files, YAML syntax errors and repeated keys become one
-    ConfigError naming the file (with line:col where YAML knows it) and ``key``,
-    the mission key that named the file.
+    A performer kind that is not registered is an error here; one whose optional
+    dependency is missing on this host is reported when its performers are built
+    (the executor of a distributed mission need not have every adapter installed).
     """
-    p = Path(path)
+    from plansys_bridge.performers.registry import PERFORMERS
+
+    kind = mission.transport_kind()
+    if kind.wall_clock_only and mission.clock.kind == "virtual":
+        raise mission.error(
+            f"the {mission.transport.kind} transport needs the wall clock (the virtual "
+            "clock would expire protocol timeouts while messages travel between processes)",
+            key="clock.kind",
+        )
+    for i, entry in enumerate(mission.performers):
+        where = f"performers[{i}]"
+        if PERFORMERS.reference(entry.kind) is None:
+            known = ", ".join(PERFORMERS.names())
+            raise mission.error(
+                f"unknown performer kind {entry.kind!r} (known: {known})", key=f"{where}.kind"
+            )
+        try:
+            cls = PERFORMERS.load(entry.kind)
+        except PluginError:
+            continue
+        cls.parse_config(entry.model_dump(), key=where)
+
+
+def _transport_kind(mission: MissionConfig) -> TransportKind:
+    from plansys_bridge.hub.transport_kinds import TRANSPORTS
+
+    name = mission.transport.kind
     try:
-        text = read_text(p, what)
-    except TextFileError as exc:
-        raise ConfigError(exc.reason, key=key, file=str(exc.location or p)) from exc
+        cls = TRANSPORTS.load(name)
+    except PluginError as exc:
+        raise mission.error(str(exc), key="transport.kind") from exc
+    settings = mission.transport.settings()
     try:
-        _check_depth(text, p, key)
-        return yaml.load(text, Loader=_UniqueKeyLoader)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"{p}:{mark.line + 1}:{mark.column + 1}" if mark is not None else str(p)
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise ConfigError(f"not valid YAML: {problem}", key=key, file=where) from exc
+        return cls(validate_settings(cls.Settings, settings, key="transport"))
+    except ConfigError as exc:
+        unknown = (exc.key or "").removeprefix("transport.")
+        if "unknown key" in exc.reason and unknown in settings:
+            others = _kinds_with_setting(unknown)
+            if others:
+                raise mission.error(
+                    f"{unknown} applies to the {' and '.join(others)} transport only",
+                    key=exc.key,
+                ) from exc
+        raise mission.locate(exc) from exc
+
+
+def _kinds_with_setting(name: str) -> list[str]:
+    """The installed transport kinds that take a setting called ``name``."""
+    from plansys_bridge.hub.transport_kinds import TRANSPORTS
+
+    found = []
+    for kind in TRANSPORTS.names():
+        try:
+            if name in TRANSPORTS.load(kind).Settings.model_fields:
+                found.append(kind)
+        except PluginError:
+            continue
+    return found
 
 
 def load_mission(path: str | Path) -> MissionConfig:
     """Read and validate a mission YAML file."""
     p = Path(path)
-    data = load_yaml_file(p, "mission file")
-    return mission_from_dict(data, source=str(p), base_dir=p.resolve().parent)
+    data, positions = load_yaml_document(p, "mission file")
+    return mission_from_dict(data, source=str(p), base_dir=p.resolve().parent, positions=positions)

@@ -198,7 +198,7 @@ def load_bridge_config(path: str | Path) -> BridgeConfig:
 
     ConfigError naming file:line:col or the key.
     """
-    from plansys_bridge.mission_config import load_yaml_file
+    from plansys_bridge.yaml_files import load_yaml_file
 
     data = load_yaml_file(path, "bridge file")
     if isinstance(data, Mapping) and "topics" not in data and "domain" in data:

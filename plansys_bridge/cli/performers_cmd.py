@@ -15,7 +15,6 @@ import signal
 from typing import TYPE_CHECKING, Any
 
 from plansys_bridge.cli.options import check_positive
-from plansys_bridge.errors import ConfigError
 
 if TYPE_CHECKING:
     from plansys_bridge.clock import Clock
@@ -45,11 +44,11 @@ def handle(args: argparse.Namespace) -> int:
     from plansys_bridge.mission_config import load_mission
 
     mission = load_mission(args.mission)
-    if mission.transport.kind != "dds":
-        raise ConfigError(
-            "performers in their own process need transport: {kind: dds}",
+    if not mission.transport_kind().distributed:
+        raise mission.error(
+            "performers in their own process need a transport between processes "
+            "(transport: {kind: dds})",
             key="transport.kind",
-            file=mission.source,
         )
     if args.time_scale is not None:
         clock_config = type(mission.clock).model_validate(

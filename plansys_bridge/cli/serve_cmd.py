@@ -46,7 +46,7 @@ def handle(args: argparse.Namespace) -> int:
     mission = load_mission(args.mission)
     domain_id = args.domain_id
     if domain_id is None:
-        domain_id = mission.transport.domain_id if mission.transport.kind == "dds" else 0
+        domain_id = mission.transport_kind().dds_domain or 0
     clock = WallClock()  # ROS 2 clients wait in real time
     with in_mission_file(mission):
         run(_serve(mission, clock, domain_id, args.duration), clock)

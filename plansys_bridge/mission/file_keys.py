@@ -18,15 +18,16 @@ __all__ = ["in_mission_file", "keyed"]
 
 @contextlib.contextmanager
 def in_mission_file(mission: MissionConfig) -> Iterator[None]:
-    """Add the mission file's name to a ConfigError that names only the key (the
-    performer plugins check their settings knowing the key, not the file)."""
+    """Add the mission file's name, and the line and column of the key, to a
+    ConfigError that names only the key (the performer plugins check their
+    settings knowing the key, not the file)."""
     try:
         yield
     except ConfigError as exc:
-        if exc.file is not None:
+        located = mission.locate(exc)
+        if located is exc:
             raise
-        message = str(exc).removeprefix(f"{exc.key}: ") if exc.key else str(exc)
-        raise ConfigError(message, key=exc.key, file=mission.source) from exc
+        raise located from exc
 
 
 @contextlib.contextmanager
@@ -35,4 +36,4 @@ def keyed(mission: MissionConfig, key: str) -> Iterator[None]:
     try:
         yield
     except PlansysBridgeError as exc:
-        raise ConfigError(str(exc), key=key, file=mission.source) from exc
+        raise mission.error(str(exc), key=key) from exc

@@ -21,6 +21,7 @@ from plansys_bridge.execution.executor import Executor
 from plansys_bridge.execution.results import ExecutionResult, efficiency_text
 from plansys_bridge.hub.messages import ActionStatus
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
+from plansys_bridge.mission.file_keys import in_mission_file
 from plansys_bridge.mission.knowledge import build_knowledge, load_domain
 from plansys_bridge.mission.session import MissionSession, Printer
 from plansys_bridge.mission.transport import make_clock
@@ -101,6 +102,18 @@ def run_mission(
     ``live=True`` shows progress as a table redrawn in place (rich, for a terminal)
     instead of one line per change.
     """
+    with in_mission_file(mission):
+        return _run_mission(mission, out, planner, plan, local_performers, live)
+
+
+def _run_mission(
+    mission: MissionConfig,
+    out: Printer | None,
+    planner: Planner | None,
+    plan: Plan | None,
+    local_performers: bool,
+    live: bool,
+) -> MissionReport:
     domain = load_domain(mission)
     knowledge = build_knowledge(mission, domain)
     if knowledge.get_goal() is None:
@@ -111,11 +124,11 @@ def run_mission(
         )
     clock = make_clock(mission)
     planner = planner or make_planner(mission)
-    if not local_performers and mission.transport.kind != "dds":
-        raise ConfigError(
-            "performers in other processes need transport: {kind: dds}",
+    if not local_performers and not mission.transport_kind().distributed:
+        raise mission.error(
+            "performers in other processes need a transport between processes "
+            "(transport: {kind: dds})",
             key="transport.kind",
-            file=mission.source,
         )
     return run(
         _run(mission, domain, knowledge, clock, planner, plan, out, local_performers, live), clock

@@ -145,7 +145,10 @@ class MissionSession:
         names = [p.name for p in self.mission.performers]
         self._say(f"waiting for performers {', '.join(names)} (dds)")
         await wait_for_performers(
-            self.hub, names, timeout=self.mission.transport.peer_timeout, where=self.mission.source
+            self.hub,
+            names,
+            timeout=self.mission.transport_kind().peer_timeout,
+            where=self.mission.source,
         )
 
     async def _start_bridge(self) -> None:

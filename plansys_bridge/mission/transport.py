@@ -1,8 +1,9 @@
 """The clock and the hub transport a mission file names.
 
-In-process unless ``transport: {kind: dds}``; DDS (and its cyclonedds import) only
-then, with the loopback configuration unless the file gives another, and signed
-messages when ``auth:`` names a fleet key.
+The transport is the plugin ``transport: {kind: ...}`` names
+(:mod:`plansys_bridge.hub.transport_kinds`): in-process by default, DDS (and its
+cyclonedds import) only when asked for; messages are signed when ``auth:`` names a
+fleet key.
 """
 
 from __future__ import annotations
@@ -10,12 +11,11 @@ from __future__ import annotations
 from collections.abc import Set
 
 from plansys_bridge.clock import Clock, VirtualClock, WallClock
-from plansys_bridge.errors import ConfigError, PlansysBridgeError
-from plansys_bridge.hub.transport import InProcessTransport, Transport
+from plansys_bridge.errors import ConfigError
+from plansys_bridge.hub.transport import Transport
 from plansys_bridge.mission.file_keys import keyed
 from plansys_bridge.mission_config import MissionConfig
 from plansys_bridge.pddl.model import Domain
-from plansys_bridge.textfile import read_text
 
 __all__ = ["make_clock", "make_transport"]
 
@@ -32,14 +32,14 @@ def make_transport(
     role: str = "executor",
     plan_ids: Set[str] | None = None,
 ) -> Transport:
-    """The hub transport the mission's ``transport:`` names (DDS imported only then),
-    signed with the fleet key when ``auth:`` gives one (:mod:`plansys_bridge.hub.auth`).
+    """The hub transport the mission's ``transport:`` names, signed with the fleet
+    key when ``auth:`` gives one (:mod:`plansys_bridge.hub.auth`).
 
-    With ``domain``, a DDS transport drops received messages about actions the domain
-    does not have (:func:`~plansys_bridge.hub.dds_checks.domain_check`), and with
-    ``plan_ids`` (filled as plans start) those about a plan this process does not
-    execute. Over DDS the
-    process shows to ROS 2 tools as the node ``<mission name>_<role>``.
+    With ``domain``, a transport between processes drops received messages about
+    actions the domain does not have (:func:`~plansys_bridge.hub.dds_checks.domain_check`),
+    and with ``plan_ids`` (filled as plans start) those about a plan this process does
+    not execute. Other processes see this one as ``<mission name>_<role>`` (over DDS,
+    the ROS 2 node name).
     """
     transport = _bare_transport(mission, domain, role, plan_ids)
     if mission.auth is None:
@@ -54,44 +54,18 @@ def make_transport(
 def _bare_transport(
     mission: MissionConfig, domain: Domain | None, role: str, plan_ids: Set[str] | None
 ) -> Transport:
-    if mission.transport.kind == "dds":
-        try:
-            from plansys_bridge.hub.dds import DdsTransport
-            from plansys_bridge.hub.dds_checks import domain_check
-        except ImportError as exc:
-            raise ConfigError(
-                f"the dds transport needs cyclonedds (pip install plansys-bridge[dds]): {exc}",
-                key="transport.kind",
-                file=mission.source,
-            ) from exc
-        check = None
-        if domain is not None:
-            actions = {a.name: len(a.parameters) for a in domain.actions}
-            check = domain_check(actions, plan_ids)
-        return DdsTransport(
-            mission.transport.domain_id,
-            config=_dds_config(mission),
-            check=check,
-            node_name=f"{mission.name}_{role}",
-        )
-    return InProcessTransport()
+    """The transport plugin's transport; its errors name the ``transport:`` key."""
+    from plansys_bridge.hub.transport_kinds import TransportContext
 
+    kind = mission.transport_kind()
+    check = None
+    if domain is not None and kind.distributed:
+        from plansys_bridge.hub.dds_checks import domain_check
 
-def _dds_config(mission: MissionConfig) -> str:
-    """The Cyclone XML for the mission's ``transport:`` (loopback unless configured)."""
-    from plansys_bridge.hub.dds_config import network_config
-
-    t = mission.transport
-    if t.config is not None:
-        try:
-            return read_text(mission.resolve(t.config), "Cyclone DDS XML")
-        except PlansysBridgeError as exc:
-            raise ConfigError(str(exc), key="transport.config", file=mission.source) from exc
+        actions = {a.name: len(a.parameters) for a in domain.actions}
+        check = domain_check(actions, plan_ids)
+    context = TransportContext(mission.base_dir, f"{mission.name}_{role}", check)
     try:
-        return network_config(
-            t.domain_id, interfaces=t.interfaces, peers=t.peer_list(), multicast=t.multicast
-        )
+        return kind.create(context)
     except ConfigError as exc:
-        raise ConfigError(
-            str(exc).split(": ", 1)[-1], key=f"transport.{exc.key}", file=mission.source
-        ) from exc
+        raise mission.error(exc.reason, key=f"transport.{exc.key}".rstrip(".")) from exc

@@ -30,7 +30,9 @@ from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from plansys_bridge.errors import ConfigError, HubError
+from pydantic import BaseModel
+
+from plansys_bridge.errors import HubError
 from plansys_bridge.hub.messages import (
     ActionExecution,
     ActionPerformerStatus,
@@ -41,7 +43,7 @@ from plansys_bridge.hub.messages import (
 )
 from plansys_bridge.hub.routing import performer_keys
 from plansys_bridge.hub.transport import Subscription
-from plansys_bridge.performers.entry import PerformerConfig, parse_entry
+from plansys_bridge.performers.entry import PerformerConfig, construct, parse_entry
 from plansys_bridge.performers.goal import (
     ActionFailed,
     ActionGoal,
@@ -49,6 +51,7 @@ from plansys_bridge.performers.goal import (
     arguments_match,
     same_goal,
 )
+from plansys_bridge.plugins import NoSettings
 
 if TYPE_CHECKING:
     from plansys_bridge.performers.bid_costs import BidCosts
@@ -68,8 +71,13 @@ log = logging.getLogger(__name__)
 class ActionPerformer(ABC):
     """Base class of every performer; subclasses implement :meth:`execute`."""
 
+    Settings: ClassVar[type[BaseModel]] = NoSettings
+    """The kind's mission-file keys besides the common ones, as a pydantic model
+    (:class:`~plansys_bridge.plugins.PluginSettings`); validated when the mission
+    loads and passed to ``__init__`` as ``settings=``."""
     settings_keys: ClassVar[frozenset[str]] = frozenset()
-    """Extra mission-file keys this kind accepts; passed to ``__init__`` as keywords."""
+    """Older shape, still honoured when ``Settings`` is not declared: extra keys
+    passed to ``__init__`` as keywords, checked there."""
 
     def __init__(
         self,
@@ -412,8 +420,16 @@ class ActionPerformer(ABC):
 
     @classmethod
     def parse_config(cls, config: Mapping[str, Any], *, key: str = "performer") -> PerformerConfig:
-        """Check a mission file's performer entry; unknown keys name themselves."""
-        return parse_entry(config, kind_name=cls.__name__, settings_keys=cls.settings_keys, key=key)
+        """Check a mission file's performer entry: the common keys, then the kind's
+        ``Settings`` (or, for a kind written before those, its ``settings_keys``)."""
+        return parse_entry(cls, config, key=key)
+
+    @classmethod
+    def prepare(cls, entry: PerformerConfig, context: PerformerContext) -> PerformerConfig:
+        """Optional: checks and loading that need the context (files next to the
+        mission, the knowledge) after the settings were validated; returns the entry
+        with what changed (``dataclasses.replace(entry, settings=...)``)."""
+        return entry
 
     @classmethod
     def from_config(
@@ -421,25 +437,12 @@ class ActionPerformer(ABC):
     ) -> list[ActionPerformer]:
         """Build the performer(s) a mission entry describes (plugin factory).
 
-        The default passes the kind-specific settings to ``__init__`` as keywords;
-        a kind that needs more (several performers from one entry, file loading)
-        overrides this and starts with :meth:`parse_config`.
+        With a ``Settings`` model the validated settings reach ``__init__`` as
+        ``settings=``; an older kind gets its ``settings_keys`` as keywords. A kind
+        that builds several performers from one entry overrides this.
         """
-        parsed = cls.parse_config(config, key=key)
-        try:
-            performer = cls(
-                context,
-                parsed.name,
-                parsed.actions,
-                heartbeat_period=parsed.heartbeat_period,
-                commit_timeout=parsed.commit_timeout,
-                **parsed.settings,
-            )
-        except ConfigError:
-            raise
-        except (TypeError, ValueError) as exc:
-            raise ConfigError(str(exc), key=key) from exc
-        return [performer]
+        entry = cls.prepare(cls.parse_config(config, key=key), context)
+        return [construct(cls, entry, context)]
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.node_name} {self.state.name}>"

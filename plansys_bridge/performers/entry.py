@@ -1,20 +1,28 @@
-"""A mission file's performer entry: the keys every kind shares, checked.
+"""A mission file's performer entry: the keys every kind shares and the kind's settings.
 
-``kind``, ``name``, ``actions`` (``{action: [specialised args]}`` or a list of
-names), ``heartbeat_period`` and ``commit_timeout`` are read here; any other key
-must be one the kind declares, and is handed to it as a setting. Each mistake is
-one ``ConfigError`` naming its key (``performers[2].actions.move[0]``).
+Every performer entry has the common keys (``kind``, ``name``, ``actions``,
+``heartbeat_period``, ``commit_timeout``); the rest belongs to the kind and is
+validated through the pydantic ``Settings`` model its class declares
+(:mod:`plansys_bridge.plugins`). A kind written before that shape lists its keys in
+``settings_keys`` and checks them in ``__init__``; both keep working.
 """
 
 from __future__ import annotations
 
-from collections.abc import Collection, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from plansys_bridge.errors import ConfigError
+from plansys_bridge.errors import ConfigError, PlansysBridgeError
+from plansys_bridge.plugins import NoSettings, settings_model, validate_settings
 
-__all__ = ["COMMON_KEYS", "PerformerConfig", "parse_entry"]
+if TYPE_CHECKING:
+    from plansys_bridge.performers.base import ActionPerformer
+    from plansys_bridge.performers.goal import PerformerContext
+
+__all__ = ["COMMON_KEYS", "PerformerConfig", "construct", "has_settings_model", "parse_entry"]
+
+COMMON_KEYS = ("kind", "name", "actions", "heartbeat_period", "commit_timeout")
 
 
 @dataclass(frozen=True)
@@ -26,61 +34,87 @@ class PerformerConfig:
     actions: dict[str, tuple[str, ...]]
     heartbeat_period: float
     commit_timeout: float
-    settings: dict[str, Any]
-    """Kind-specific settings, only keys the class declares in ``settings_keys``."""
+    settings: Any
+    """The kind's settings: its validated ``Settings`` instance (or what the kind's
+    ``prepare`` made of it); for a kind without ``Settings``, the ``settings_keys``
+    given, as a dict."""
     key: str
     """Where the entry is in the mission file, e.g. ``performers[2]``."""
+    raw: Mapping[str, Any]
+    """The entry as written."""
 
 
-COMMON_KEYS = ("kind", "name", "actions", "heartbeat_period", "commit_timeout")
+def has_settings_model(cls: type) -> bool:
+    """Does the performer class declare its settings as a pydantic ``Settings`` model?"""
+    model = settings_model(cls)
+    return model is not None and model is not NoSettings
 
 
 def parse_entry(
-    config: Mapping[str, Any],
-    *,
-    kind_name: str,
-    settings_keys: Collection[str],
-    key: str = "performer",
+    cls: type[ActionPerformer], config: Mapping[str, Any], *, key: str = "performer"
 ) -> PerformerConfig:
-    """Check a mission file's performer entry for a kind (``kind_name`` as users
-    read it, ``settings_keys`` its own keys); unknown keys name themselves."""
+    """Check the common keys and the kind's settings; every error names its key."""
     if not isinstance(config, Mapping):
         raise ConfigError("a performer entry must be a mapping", key=key)
-    allowed = set(COMMON_KEYS) | set(settings_keys)
-    for entry_key in config:
-        if entry_key not in allowed:
-            raise ConfigError(
-                f"unknown key for a {kind_name} (allowed: {', '.join(sorted(allowed))})",
-                key=f"{key}.{entry_key}",
-            )
     kind = config.get("kind", "")
     if not isinstance(kind, str):
         raise ConfigError(f"must be a string, got {kind!r}", key=f"{key}.kind")
     name = config.get("name")
     if not isinstance(name, str) or not name.strip():
         raise ConfigError("a performer needs a non-empty string name", key=f"{key}.name")
-    actions = _parse_actions(config.get("actions"), f"{key}.actions")
-    heartbeat = _positive(config.get("heartbeat_period", 1.0), f"{key}.heartbeat_period")
-    commit = _positive(config.get("commit_timeout", 2.0), f"{key}.commit_timeout")
-    settings = {k: v for k, v in config.items() if k not in COMMON_KEYS}
+    rest = {k: v for k, v in config.items() if k not in COMMON_KEYS}
+    settings: Any
+    if has_settings_model(cls):
+        settings = validate_settings(cls.Settings, rest, key=key, known=COMMON_KEYS)
+    else:
+        allowed = set(COMMON_KEYS) | set(cls.settings_keys)
+        for entry_key in config:
+            if entry_key not in allowed:
+                raise ConfigError(
+                    f"unknown key for a {cls.__name__} (allowed: {', '.join(sorted(allowed))})",
+                    key=f"{key}.{entry_key}",
+                )
+        settings = rest
     return PerformerConfig(
         kind=kind,
         name=name.strip(),
-        actions=actions,
-        heartbeat_period=heartbeat,
-        commit_timeout=commit,
+        actions=parse_actions(config.get("actions"), f"{key}.actions"),
+        heartbeat_period=positive(config.get("heartbeat_period", 1.0), f"{key}.heartbeat_period"),
+        commit_timeout=positive(config.get("commit_timeout", 2.0), f"{key}.commit_timeout"),
         settings=settings,
         key=key,
+        raw=config,
     )
 
 
-def _positive(value: object, key: str) -> float:
+def construct(
+    cls: type[ActionPerformer], entry: PerformerConfig, context: PerformerContext
+) -> ActionPerformer:
+    """``cls(context, name, actions, ..., settings=...)``; a refusal of ``__init__``
+    is a ConfigError naming the entry."""
+    kwargs = {"settings": entry.settings} if has_settings_model(cls) else dict(entry.settings)
+    try:
+        return cls(
+            context,
+            entry.name,
+            entry.actions,
+            heartbeat_period=entry.heartbeat_period,
+            commit_timeout=entry.commit_timeout,
+            **kwargs,
+        )
+    except ConfigError:
+        raise
+    except (PlansysBridgeError, TypeError, ValueError) as exc:
+        raise ConfigError(str(exc), key=entry.key) from exc
+
+
+def positive(value: object, key: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not value > 0:
         raise ConfigError(f"must be a number > 0, got {value!r}", key=key)
     return float(value)
 
 
-def _parse_actions(value: object, key: str) -> dict[str, tuple[str, ...]]:
+def parse_actions(value: object, key: str) -> dict[str, tuple[str, ...]]:
     """``actions`` is ``{action: [specialised args]}`` (or a list of action names)."""
     if value is None:
         raise ConfigError("missing: the actions this performer serves", key=key)

@@ -3,23 +3,23 @@
 A mission names a performer ``kind`` (``simulated``, ``mavlink``, ``can``, ``rosbag``,
 or one a third-party package registers); the class is imported only when a mission
 asks for it, so a missing optional dependency (pymavlink for ``mavlink``) costs
-nothing until then and is reported as one clear error saying which extra to install.
+nothing until then and is reported as one clear error saying which extra to install
+(:class:`~plansys_bridge.plugins.PluginRegistry`).
 """
 
 from __future__ import annotations
 
 import contextlib
-import functools
-import importlib.util
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
 from plansys_bridge.errors import AdapterError, ConfigError, PlansysBridgeError, PluginError
 from plansys_bridge.performers.base import ActionPerformer, PerformerContext, arguments_match
+from plansys_bridge.plugins import GROUPS, PluginRegistry
 
 __all__ = [
     "ENTRY_POINT_GROUP",
+    "PERFORMERS",
     "available_performer_kinds",
     "load_performer_kind",
     "performers_from_config",
@@ -27,72 +27,33 @@ __all__ = [
     "unserved_actions",
 ]
 
-ENTRY_POINT_GROUP = "plansys_bridge.performers"
+ENTRY_POINT_GROUP = GROUPS["performers"]
 
-# Top-level module of an optional dependency -> the extra that installs it.
-_EXTRA_FOR_MODULE = {
-    "pymavlink": "mavlink",
-    "can": "can",
-    "cantools": "can",
-    "rosbags": "rosbag",
-    "mcap": "rosbag",
-    "cyclonedds": "dds",
-}
-
-
-def _entry_points() -> dict[str, EntryPoint]:
-    return {ep.name: ep for ep in entry_points(group=ENTRY_POINT_GROUP)}
+PERFORMERS: PluginRegistry[ActionPerformer] = PluginRegistry(
+    ENTRY_POINT_GROUP,
+    ActionPerformer,
+    "performer kind",
+    builtin={
+        "simulated": "plansys_bridge.performers.simulated:SimulatedPerformer",
+        "bt": "plansys_bridge.performers.bt.performer:BTActionPerformer",
+        "mavlink": "plansys_bridge_adapters.mavlink.performer:MavlinkPerformer",
+        "can": "plansys_bridge_adapters.can.performer:CanBasePerformer",
+        "rosbag": "plansys_bridge_adapters.rosbag.performer:BagNavigationPerformer",
+        "ros2_nav2": "plansys_bridge_adapters.ros2_nav2.performer:Nav2Performer",
+        "ros1_move_base": "plansys_bridge_adapters.ros1.performer:MoveBasePerformer",
+    },
+)
+"""The performer kinds installed (entry-point group ``plansys_bridge.performers``)."""
 
 
 def available_performer_kinds() -> list[str]:
     """Names of the performer kinds installed (importable or not)."""
-    return sorted(_entry_points())
+    return sorted(PERFORMERS.names())
 
 
-@functools.cache
 def load_performer_kind(kind: str) -> type[ActionPerformer]:
     """The performer class registered as ``kind``; PluginError if unknown or not importable."""
-    eps = _entry_points()
-    ep = eps.get(kind)
-    if ep is None:
-        known = ", ".join(sorted(eps)) or "none installed"
-        raise PluginError(f"unknown performer kind {kind!r} (known kinds: {known})")
-    try:
-        obj = ep.load()
-    except ModuleNotFoundError as exc:
-        missing = (exc.name or "").split(".")[0]
-        extra = _EXTRA_FOR_MODULE.get(missing)
-        if extra is None and _installed(missing):
-            # the package is there but the module the entry point names is not
-            raise PluginError(
-                f"performer kind {kind!r} points at {ep.value}: "
-                f"no module named {exc.name!r} (is the entry point misspelt?)"
-            ) from exc
-        hint = (
-            f"install it with: pip install 'plansys-bridge[{extra}]'"
-            if extra
-            else f"install the package that provides {missing!r}"
-        )
-        raise PluginError(
-            f"performer kind {kind!r} needs the optional dependency {missing!r}; {hint}"
-        ) from exc
-    except (ImportError, AttributeError) as exc:
-        raise PluginError(
-            f"performer kind {kind!r} could not be loaded from {ep.value}: {exc}"
-        ) from exc
-    if not (isinstance(obj, type) and issubclass(obj, ActionPerformer)):
-        raise PluginError(
-            f"performer kind {kind!r} ({ep.value}) is not an ActionPerformer subclass"
-        )
-    return obj
-
-
-def _installed(module: str) -> bool:
-    """Is the top-level ``module`` importable (its package installed)?"""
-    try:
-        return bool(module) and importlib.util.find_spec(module) is not None
-    except (ImportError, ValueError):
-        return False
+    return PERFORMERS.load(kind)
 
 
 async def start_performers(

@@ -165,47 +165,50 @@ def test_nonsense_number_is_refused_naming_the_option(
         (
             "kind: simulated",
             "kind: simulatd",
-            "mission.yaml:performers[0].kind: unknown performer kind 'simulatd'",
+            "mission.yaml:9:6: performers[0].kind: unknown performer kind 'simulatd'",
         ),
         (
             "actions: {move: [tiago]}",
             "actions: {move: [tiago]}, duratons: {move: 2}",
-            "mission.yaml:performers[0].duratons: unknown key",
+            "mission.yaml:9:60: performers[0].duratons: unknown key",
         ),
         (
             "actions: {move: [tiago]}",
             "actions: {mvoe: [tiago]}",
-            "mission.yaml:performers[0].actions.mvoe: domain flat_navigation has no action 'mvoe'",
+            "mission.yaml:9:44: performers[0].actions.mvoe: "
+            "domain flat_navigation has no action 'mvoe'",
         ),
         (
             "clock: {kind: virtual}",
             "clock: {kind: virtual}\nevents: [{at: 2, add_predicate: (connected hall mars)}]",
-            "mission.yaml:events[0].add_predicate: <atom>:1:17: unknown object 'mars'",
+            "mission.yaml:11:18: events[0].add_predicate: <atom>:1:17: unknown object 'mars'",
         ),
         (
             "clock: {kind: virtual}",
             "clock: {kind: virtual}\nevents: [{at: 2, set_function: (= (travel_tim hall) 3)}]",
-            "mission.yaml:events[0].set_function: <fluent>:1:5: unknown function 'travel_tim'",
+            "mission.yaml:11:18: events[0].set_function: "
+            "<fluent>:1:5: unknown function 'travel_tim'",
         ),
         (
             "actions: {move: [tiago]}",
             "actions: {move: [tiagoo]}",
-            "mission.yaml:performers[0].actions.move[0]: no object 'tiagoo' in the mission's",
+            "mission.yaml:9:51: performers[0].actions.move[0]: no object 'tiagoo' in the mission's",
         ),
         (
             "actions: {move: [tiago]}",
             "actions: {move: [tiago]}, durations: {mvoe: 3}",
-            "mission.yaml:performers[0].durations.mvoe: not one of this performer's actions",
+            "mission.yaml:9:72: performers[0].durations.mvoe: not one of this performer's actions",
         ),
         (
             "actions: {move: [tiago]}",
             "actions: {move: [tiago]}, durations: {'(fly tiago a b)': 3}",
-            "mission.yaml:performers[0].durations.(fly tiago a b): not one of this performer's",
+            "mission.yaml:9:72: performers[0].durations.(fly tiago a b): "
+            "not one of this performer's",
         ),
         (
             f"domain: {DOMAIN}",
             "domain: []",
-            "mission.yaml:domain: List should have at least 1 item",
+            "mission.yaml:2:1: domain: List should have at least 1 item",
         ),
         (
             "clock: {kind: virtual}",

@@ -55,7 +55,7 @@ def test_misspelt_url_scheme_is_found_at_load(
     path = copter(tmp_path, url="tpc:127.0.0.1:5760")
     assert main(["run", str(path)]) == 2
     line = error_line(capsys)
-    assert line.startswith(f"error: {path}:performers[0].url: tpc:127.0.0.1:5760: unknown")
+    assert line.startswith(f"error: {path}:37:3: performers[0].url: tpc:127.0.0.1:5760: unknown")
     assert "did you mean tcp:?" in line
 
 
@@ -66,14 +66,14 @@ def test_negative_default_alt_names_the_key(
     path = copter(tmp_path, locations=places)
     assert main(["run", str(path)]) == 2
     assert error_line(capsys).startswith(
-        f"error: {path}:performers[0].locations.default_alt: must be > 0"
+        f"error: {path}:25:5: performers[0].locations.default_alt: must be > 0"
     )
 
 
 def test_nul_byte_in_a_locations_path(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = copter(tmp_path, locations="places\0.yaml")
     assert main(["run", str(path)]) == 2
-    assert error_line(capsys).startswith(f"error: {path}:performers[0].locations: a NUL byte")
+    assert error_line(capsys).startswith(f"error: {path}:24:3: performers[0].locations: a NUL byte")
 
 
 def _cooking(tmp_path: Path, **changes: Any) -> Path:
@@ -89,7 +89,7 @@ def _cooking(tmp_path: Path, **changes: Any) -> Path:
 def test_nul_byte_in_the_domain_path(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = _cooking(tmp_path, domain="a\0b.pddl")
     assert main(["run", str(path)]) == 2
-    assert error_line(capsys).startswith(f"error: {path}:domain: a NUL byte in 'a\\x00b.pddl'")
+    assert error_line(capsys).startswith(f"error: {path}:3:1: domain: a NUL byte in 'a\\x00b.pddl'")
 
 
 def test_missing_domain_names_the_mission_file_and_key(
@@ -98,7 +98,9 @@ def test_missing_domain_names_the_mission_file_and_key(
     path = _cooking(tmp_path, domain="nan")
     assert main(["run", str(path)]) == 2
     line = error_line(capsys)
-    assert line.startswith(f"error: {path}:domain: {tmp_path / 'nan'}: cannot read domain file")
+    assert line.startswith(
+        f"error: {path}:3:1: domain: {tmp_path / 'nan'}: cannot read domain file"
+    )
 
 
 @pytest.mark.parametrize("depth", [101, 400, 5000])

@@ -147,7 +147,7 @@ def test_split_runs_need_the_dds_transport(
     with pytest.raises(ConfigError, match="transport"):
         run_mission(load_mission(path), out=None, local_performers=False)
     assert main(["performers", str(path)]) == 2
-    assert "need transport: {kind: dds}" in capsys.readouterr().err
+    assert "need a transport between processes (transport: {kind: dds})" in capsys.readouterr().err
 
 
 def test_dds_with_the_virtual_clock_is_refused_on_load(tmp_path: Path) -> None:

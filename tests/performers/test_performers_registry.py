@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from collections.abc import Iterator
 from importlib.metadata import EntryPoint
 from pathlib import Path
 
@@ -16,8 +17,10 @@ from plansys_bridge.performers.simulated import SimulatedPerformer
 
 
 @pytest.fixture(autouse=True)
-def _fresh_cache() -> None:
-    registry.load_performer_kind.cache_clear()
+def _fresh_cache() -> Iterator[None]:
+    registry.PERFORMERS.cache_clear()
+    yield
+    registry.PERFORMERS.cache_clear()
 
 
 def _fake_entry_points(monkeypatch: pytest.MonkeyPatch, **points: str) -> None:
@@ -25,7 +28,8 @@ def _fake_entry_points(monkeypatch: pytest.MonkeyPatch, **points: str) -> None:
         name: EntryPoint(name=name, value=value, group=registry.ENTRY_POINT_GROUP)
         for name, value in points.items()
     }
-    monkeypatch.setattr(registry, "_entry_points", lambda: eps)
+    monkeypatch.setattr(registry.PERFORMERS, "entry_points", lambda: eps)
+    monkeypatch.setattr(registry.PERFORMERS, "builtin", {})
 
 
 def test_simulated_kind_is_installed() -> None:
@@ -35,7 +39,7 @@ def test_simulated_kind_is_installed() -> None:
 
 def test_unknown_kind_lists_the_known_ones() -> None:
     with pytest.raises(
-        PluginError, match=r"unknown performer kind 'simulatd' \(known kinds: .*simulated"
+        PluginError, match=r"unknown performer kind 'simulatd' \(known: .*simulated"
     ):
         registry.load_performer_kind("simulatd")
 

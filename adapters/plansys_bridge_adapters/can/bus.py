@@ -87,7 +87,7 @@ def choose_interface(
     simulated base falls back to the virtual bus, saying so.
     """
     if interface is not None:
-        _check_known(interface, "interface")
+        check_known_interface(interface, "interface")
         return interface, channel or "plansys_can0", "the mission file"
     found: dict[str, Any] = {}
     # python-can's own order (can.util.load_config): can.rc, environment, config files
@@ -96,7 +96,7 @@ def choose_interface(
             found.setdefault("interface" if name == "bustype" else name, value)
     if found.get("interface"):
         name = str(found["interface"])
-        _check_known(name, f"interface from {PYTHON_CAN_CONFIG}")
+        check_known_interface(name, f"interface from {PYTHON_CAN_CONFIG}")
         return name, str(found.get("channel") or channel or "can0"), PYTHON_CAN_CONFIG
     if simulated:
         return "virtual", channel or "plansys_can0", "the default for a simulated base"
@@ -105,7 +105,7 @@ def choose_interface(
     )
 
 
-def _check_known(interface: str, what: str) -> None:
+def check_known_interface(interface: str, what: str) -> None:
     known = sorted(can.interfaces.VALID_INTERFACES)
     if interface not in known:
         close = difflib.get_close_matches(interface, known, n=1)

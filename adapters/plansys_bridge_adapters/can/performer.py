@@ -27,7 +27,8 @@ import contextlib
 import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any, ClassVar
+from dataclasses import replace
+from typing import Any
 
 from plansys_bridge.clock import VirtualClock
 from plansys_bridge.errors import ConfigError, PlansysBridgeError
@@ -38,6 +39,7 @@ from plansys_bridge.performers.base import (
     ActionPerformer,
     PerformerContext,
 )
+from plansys_bridge.performers.entry import PerformerConfig
 
 from .bus import BusSendError, CanBusClient
 from .controller import Path, PathFollower, Pose2D
@@ -45,7 +47,14 @@ from .dbc import BaseStatus, EStopCommand, MobileBaseDbc, OdomPose, VelocityComm
 from .double import BaseDouble
 from .monitor import BaseMonitor, Mark, Problem
 from .replay import LogReplay
-from .settings import CanBaseSettings, Location, parse_settings
+from .settings import (
+    CanBaseSettings,
+    CanSettings,
+    Location,
+    parse_motions,
+    resolve,
+    robot_name,
+)
 
 __all__ = ["CanBasePerformer"]
 
@@ -63,22 +72,7 @@ class _BaseFailure(Exception):
 class CanBasePerformer(ActionPerformer):
     """Drives one differential-drive base on a CAN bus (see the module docstring)."""
 
-    settings_keys: ClassVar[frozenset[str]] = frozenset(
-        {
-            "robot",
-            "bus",
-            "dbc",
-            "locations",
-            "controller",
-            "safety",
-            "battery",
-            "simulate_base",
-            "replay",
-            "feedback_period",
-            "record_topic",
-            "record_period",
-        }
-    )
+    Settings = CanSettings
 
     def __init__(
         self,
@@ -122,32 +116,21 @@ class CanBasePerformer(ActionPerformer):
     # -- construction -----------------------------------------------------------
 
     @classmethod
-    def from_config(
-        cls, config: Mapping[str, Any], context: PerformerContext, *, key: str = "performer"
-    ) -> list[ActionPerformer]:
+    def parse_config(cls, config: Mapping[str, Any], *, key: str = "performer") -> PerformerConfig:
+        """``actions`` of a base also says which argument is the destination
+        (``{move: {robot: 0, destination: 2}}``); the common check sees the
+        specialised arguments derived from it."""
         if not isinstance(config, Mapping):
             raise ConfigError("a performer entry must be a mapping", key=key)
-        # ``actions`` here also says which argument is the destination, so it is parsed
-        # by this kind; the framework checks the common keys on the derived spec lists.
-        settings_in = {k: v for k, v in config.items() if k in cls.settings_keys}
-        settings, specs = parse_settings(settings_in, config.get("actions"), context.base_dir, key)
-        parsed = cls.parse_config(
-            {**config, "actions": {a: list(s) for a, s in specs.items()}}, key=key
-        )
-        try:
-            performer = cls(
-                context,
-                parsed.name,
-                parsed.actions,
-                settings=settings,
-                heartbeat_period=parsed.heartbeat_period,
-                commit_timeout=parsed.commit_timeout,
-            )
-        except PlansysBridgeError as exc:
-            if isinstance(exc, ConfigError):
-                raise
-            raise ConfigError(str(exc), key=f"{key}.dbc") from exc
-        return [performer]
+        specs, _ = parse_motions(config.get("actions"), robot_name(config, key), f"{key}.actions")
+        derived = {**config, "actions": {a: list(s) for a, s in specs.items()}}
+        return replace(super().parse_config(derived, key=key), raw=config)
+
+    @classmethod
+    def prepare(cls, entry: PerformerConfig, context: PerformerContext) -> PerformerConfig:
+        actions = entry.raw.get("actions")
+        settings = resolve(entry.settings, actions, context.base_dir, entry.key)
+        return replace(entry, settings=settings)
 
     # -- lifecycle ----------------------------------------------------------------
 

@@ -1,4 +1,4 @@
-"""The CAN performer's mission-file settings, checked up front with precise keys.
+"""The CAN performer's mission-file settings, as the pydantic model the mission loads.
 
 A performer entry looks like::
 
@@ -15,29 +15,33 @@ A performer entry looks like::
       simulate_base: {x: 0.0, y: 0.0}   # virtual bus only: run the base double
       record_topic: /r2d2/pose          # odometry into the mission bag (every record_period)
 
-Every mistake is a :class:`ConfigError` naming its key (``performers[1].safety.
-heartbeat_timeout``) and, for the locations file, the file.
+:class:`CanSettings` is validated when the mission loads (every mistake names its
+key, line and column); :func:`resolve` then loads the locations file, picks the bus
+through python-can's configuration chain and gives the performer its
+:class:`CanBaseSettings`.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
-import types
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TypeVar, Union, get_args, get_origin, get_type_hints
+from typing import Annotated, Any, Literal, TypeVar, get_type_hints
 
-from plansys_bridge.errors import ConfigError
-from plansys_bridge.mission_config import load_yaml_file
+from pydantic import Field, ValidationInfo, create_model, field_validator, model_validator
 
-from .bus import BusConfig, choose_interface
+from plansys_bridge.errors import ConfigError, PlansysBridgeError
+from plansys_bridge.plugins import PluginSettings, validate_settings
+from plansys_bridge.yaml_files import load_yaml_document
+
+from .bus import BusConfig, check_known_interface, choose_interface
 from .controller import ControllerConfig, MotionLimits
+from .dbc import MobileBaseDbc
 from .double import BaseDoubleConfig, BaseLimits
 from .replay import ReplaySettings, parse_replay
 
-T = TypeVar("T")
+D = TypeVar("D")
 
 
 @dataclass(frozen=True)
@@ -59,199 +63,219 @@ class MotionAction:
     destination_arg: int
 
 
-@dataclass(frozen=True)
-class SafetySettings:
-    command_rate: float = 20.0
+class SafetySettings(PluginSettings):
+    command_rate: float = Field(20.0, ge=0)
     """Velocity commands per second while an action runs (keeps the base's watchdog fed)."""
-    heartbeat_timeout: float = 0.5
+    heartbeat_timeout: float = Field(0.5, ge=0)
     """No BASE_Status with a new alive counter for this long = heartbeat lost."""
-    odometry_timeout: float = 0.3
-    startup_timeout: float = 2.0
+    odometry_timeout: float = Field(0.3, ge=0)
+    startup_timeout: float = Field(2.0, ge=0)
     """How long an action waits for fresh odometry and status before failing."""
-    stop_timeout: float = 3.0
+    stop_timeout: float = Field(3.0, ge=0)
     """How long a cancel/arrival waits for the measured twist to confirm standstill."""
-    stopped_linear: float = 0.01
-    stopped_angular: float = 0.02
-    stall_timeout: float = 10.0
+    stopped_linear: float = Field(0.01, ge=0)
+    stopped_angular: float = Field(0.02, ge=0)
+    stall_timeout: float = Field(10.0, ge=0)
     """Commanded to move but the pose has not changed for this long = stalled."""
-    max_duration: float | None = None
-    error_frame_limit: int = 1
+    max_duration: float | None = Field(None, ge=0)
+    error_frame_limit: int = Field(1, ge=0)
     """CAN error frames during one action that end it (1: the first one does)."""
     estop_on_stop_failure: bool = True
     """Engage the e-stop when a cancel cannot confirm that the base stopped."""
 
 
-@dataclass(frozen=True)
-class BatterySettings:
+class BatterySettings(PluginSettings):
     """Write the status frame's battery into the knowledge base."""
 
     function: str | None = "battery"
     """Numeric fluent set as ``(= (<function> <robot>) <percent>)``; null to skip."""
     low_predicate: str | None = None
     """Predicate ``(<low_predicate> <robot>)`` added below ``low_below`` percent."""
-    low_below: float = 20.0
-    hysteresis: float = 2.0
+    low_below: float = Field(20.0, ge=0)
+    hysteresis: float = Field(2.0, ge=0)
     """The low predicate is removed again only above ``low_below + hysteresis``."""
-    min_change: float = 1.0
+    min_change: float = Field(1.0, ge=0)
     """Percent change before the fluent is written again (keeps the knowledge calm)."""
+
+
+def _flat_model(name: str, *classes: type, signed: frozenset[str] = frozenset()) -> Any:
+    """A settings model with the fields of ``classes`` (dataclasses) in one flat
+    mapping, as the mission file gives them: numbers finite and, unless ``signed``,
+    not negative (the dataclasses check what must be > 0)."""
+    fields: dict[str, Any] = {}
+    for cls in classes:
+        hints = get_type_hints(cls)
+        for f in dataclasses.fields(cls):
+            if f.name == "limits" or f.name in fields:
+                continue
+            numeric = hints[f.name] in (float, int, float | None, int | None)
+            bound: dict[str, Any] = {"ge": 0} if numeric and f.name not in signed else {}
+            fields[f.name] = (hints[f.name], Field(f.default, **bound))
+    return create_model(name, __base__=PluginSettings, **fields)
+
+
+ControllerSettings = _flat_model("ControllerSettings", ControllerConfig, MotionLimits)
+"""``controller:`` gains and limits (:class:`ControllerConfig`, :class:`MotionLimits`)."""
+SimulatedBaseSettings = _flat_model(
+    "SimulatedBaseSettings", BaseDoubleConfig, BaseLimits, signed=frozenset({"x", "y", "yaw"})
+)
+"""``simulate_base:`` the double's start pose, physics and limits."""
+
+
+def _split(values: Any, outer: Callable[..., D], inner: type, key: str) -> D:
+    """``outer(**rest, limits=inner(**its fields))`` from a flat settings model."""
+    data = values.model_dump()
+    names = {f.name for f in dataclasses.fields(inner)}
+    try:
+        limits = inner(**{k: v for k, v in data.items() if k in names})
+        return outer(**{k: v for k, v in data.items() if k not in names}, limits=limits)
+    except ValueError as exc:
+        raise ConfigError(str(exc), key=key) from exc
+
+
+def _true_is_empty(value: object) -> object:
+    """``battery: true`` means the defaults, ``false`` means none."""
+    if value is True:
+        return {}
+    return None if value is False else value
+
+
+class BusSettings(PluginSettings):
+    interface: str | None = Field(None, min_length=1)
+    """A python-can interface; without one, python-can's own configuration decides."""
+    channel: str | None = None
+    bitrate: int | None = Field(None, gt=0)
+    reader: Literal["auto", "notifier", "poll"] = "auto"
+    poll_period: float = Field(0.005, gt=0)
+    send_timeout: float = Field(0.05, gt=0)
+    reopen_period: float | None = Field(1.0, gt=0)
+    options: dict[str, Any] = Field(default_factory=dict)
+    """Extra keyword arguments for :class:`can.Bus`."""
+
+    @field_validator("channel", mode="before")
+    @classmethod
+    def _channel_number(cls, value: object) -> object:
+        return str(value) if isinstance(value, int) and not isinstance(value, bool) else value
+
+    @field_validator("interface")
+    @classmethod
+    def _known(cls, value: str | None) -> str | None:
+        if value is not None:
+            check_known_interface(value, "interface")
+        return value
+
+
+class CanSettings(PluginSettings):
+    """The kind-specific keys of a ``kind: can`` performer entry."""
+
+    robot: Annotated[str, Field(min_length=1, pattern=r"\S")]
+    """The PDDL object this base is."""
+    locations: Any = Field(...)
+    """A locations file (``locations:`` mapping) or the mapping itself."""
+    bus: BusSettings = Field(default_factory=BusSettings)
+    dbc: str | None = None
+    controller: ControllerSettings = Field(default_factory=ControllerSettings)  # type: ignore[valid-type]
+    safety: SafetySettings = Field(default_factory=SafetySettings)
+    battery: BatterySettings | None = None
+    simulate_base: SimulatedBaseSettings | None = None  # type: ignore[valid-type]
+    feedback_period: float = Field(0.2, gt=0)
+    record_topic: str = Field("", pattern=r"^(/.*)?$")
+    """Bag topic of the odometry pose when the mission is recorded ("": /<robot>/pose)."""
+    record_period: float = Field(0.1, gt=0)
+    replay: Any = None
+    """A recorded log (``{log, rate, include_tx}`` or its path) played on the virtual
+    bus in place of the base (:mod:`.replay`); checked with the log when built."""
+
+    _battery = field_validator("battery", mode="before")(_true_is_empty)
+    _simulate = field_validator("simulate_base", mode="before")(_true_is_empty)
+
+    @field_validator("simulate_base")
+    @classmethod
+    def _double_needs_virtual_bus(cls, value: Any, info: ValidationInfo) -> Any:
+        bus = info.data.get("bus")
+        interface = bus.interface if isinstance(bus, BusSettings) else None
+        if value is not None and interface not in (None, "virtual"):
+            raise ValueError(
+                f"the simulated base runs only on the 'virtual' interface, not {interface!r}; "
+                "remove simulate_base to drive a real base"
+            )
+        return value
 
 
 @dataclass(frozen=True)
 class CanBaseSettings:
+    """What the performer runs with: :class:`CanSettings` with its files loaded and
+    the bus chosen."""
+
     robot: str
     motions: dict[str, MotionAction]
     locations: dict[str, Location]
-    bus: BusConfig = field(default_factory=BusConfig)
+    bus: BusConfig = dataclasses.field(default_factory=BusConfig)
     dbc: Path | None = None
-    controller: ControllerConfig = field(default_factory=ControllerConfig)
-    safety: SafetySettings = field(default_factory=SafetySettings)
+    controller: ControllerConfig = dataclasses.field(default_factory=ControllerConfig)
+    safety: SafetySettings = dataclasses.field(default_factory=SafetySettings)
     battery: BatterySettings | None = None
     simulate_base: BaseDoubleConfig | None = None
-    replay: ReplaySettings | None = None
-    """A recorded log played on the virtual bus in place of the base (:mod:`.replay`)."""
     feedback_period: float = 0.2
     record_topic: str = ""
-    """Bag topic of the odometry pose when the mission is recorded ("": /<robot>/pose)."""
     record_period: float = 0.1
+    replay: ReplaySettings | None = None
+    """A recorded log played on the virtual bus in place of the base (:mod:`.replay`)."""
 
 
-def _type_ok(value: object, hint: object) -> bool:
-    origin = get_origin(hint)
-    if origin in (Union, types.UnionType):
-        return any(_type_ok(value, arg) for arg in get_args(hint))
-    if hint is type(None):
-        return value is None
-    if hint is bool:
-        return isinstance(value, bool)
-    if hint is float:
-        return isinstance(value, int | float) and not isinstance(value, bool)
-    if hint is int:
-        return isinstance(value, int) and not isinstance(value, bool)
-    if hint is str:
-        return isinstance(value, str)
-    return False
-
-
-def parse_dataclass(cls: type[T], value: object, key: str, **fixed: Any) -> T:
-    """Build a flat dataclass of numbers/bools/strings from a mapping, naming bad keys.
-
-    Numbers must be finite and, unless the field is a signed angle or position,
-    not negative.
-    """
-    if value is None:
-        value = {}
-    if not isinstance(value, Mapping):
-        raise ConfigError(f"must be a mapping, got {value!r}", key=key)
-    hints = get_type_hints(cls)
-    names = [f.name for f in dataclasses.fields(cls)]  # type: ignore[arg-type]
-    kwargs: dict[str, Any] = dict(fixed)
-    for name, item in value.items():
-        where = f"{key}.{name}"
-        if name not in names or name in fixed:
-            allowed = ", ".join(n for n in names if n not in fixed)
-            raise ConfigError(f"unknown key (allowed: {allowed})", key=where)
-        hint = hints[name]
-        if not _type_ok(item, hint):
-            raise ConfigError(f"expected {_hint_text(hint)}, got {item!r}", key=where)
-        if isinstance(item, int | float) and not isinstance(item, bool):
-            if not math.isfinite(item):
-                raise ConfigError(f"must be finite, got {item!r}", key=where)
-            if item < 0 and name not in _SIGNED:
-                raise ConfigError(f"must not be negative, got {item!r}", key=where)
-            if _accepts_float(hint):
-                item = float(item)
-        kwargs[name] = item
-    try:
-        return cls(**kwargs)
-    except (TypeError, ValueError) as exc:
-        raise ConfigError(str(exc), key=key) from exc
-
-
-_SIGNED = frozenset({"x", "y", "yaw"})
-
-
-def _accepts_float(hint: object) -> bool:
-    return hint is float or float in get_args(hint)
-
-
-def _hint_text(hint: object) -> str:
-    if get_origin(hint) in (Union, types.UnionType):
-        return " or ".join(_hint_text(a) for a in get_args(hint))
-    if hint is type(None):
-        return "null"
-    return {float: "a number", int: "an integer", bool: "true/false", str: "a string"}.get(
-        hint,
-        str(hint),  # type: ignore[call-overload]
-    )
-
-
-def _number(value: object, key: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise ConfigError(f"must be a number, got {value!r}", key=key)
-    return float(value)
-
-
-def parse_location(name: str, value: object, key: str) -> Location:
+class LocationSpec(PluginSettings):
     """``{x, y, yaw?, via?}`` or ``[x, y]`` / ``[x, y, yaw]``."""
-    if isinstance(value, list | tuple):
-        if len(value) not in (2, 3):
-            raise ConfigError(f"must be [x, y] or [x, y, yaw], got {value!r}", key=key)
-        nums = [_number(v, f"{key}[{i}]") for i, v in enumerate(value)]
-        return Location(name, nums[0], nums[1], nums[2] if len(nums) == 3 else None)
-    if not isinstance(value, Mapping):
-        raise ConfigError(f"must be {{x, y, yaw}} or [x, y, yaw], got {value!r}", key=key)
-    for item in value:
-        if item not in ("x", "y", "yaw", "via"):
-            raise ConfigError("unknown key (allowed: x, y, yaw, via)", key=f"{key}.{item}")
-    for item in ("x", "y"):
-        if item not in value:
-            raise ConfigError("missing", key=f"{key}.{item}")
-    yaw = value.get("yaw")
-    via_value = value.get("via") or []
-    if not isinstance(via_value, list | tuple):
-        raise ConfigError(f"must be a list of [x, y] points, got {via_value!r}", key=f"{key}.via")
-    via: list[tuple[float, float]] = []
-    for i, point in enumerate(via_value):
-        where = f"{key}.via[{i}]"
-        if not isinstance(point, list | tuple) or len(point) != 2:
-            raise ConfigError(f"must be [x, y], got {point!r}", key=where)
-        via.append((_number(point[0], f"{where}[0]"), _number(point[1], f"{where}[1]")))
-    return Location(
-        name,
-        _number(value["x"], f"{key}.x"),
-        _number(value["y"], f"{key}.y"),
-        None if yaw is None else _number(yaw, f"{key}.yaw"),
-        tuple(via),
+
+    x: float
+    y: float
+    yaw: float | None = None
+    via: list[Annotated[list[float], Field(min_length=2, max_length=2)]] = Field(
+        default_factory=list
     )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _list_form(cls, value: object) -> object:
+        if isinstance(value, list | tuple):
+            if len(value) not in (2, 3):
+                raise ValueError(f"must be [x, y] or [x, y, yaw], got {list(value)!r}")
+            return dict(zip(("x", "y", "yaw"), value, strict=False))
+        return value
+
+
+class _LocationTable(PluginSettings):
+    locations: dict[str, LocationSpec] = Field(min_length=1)
 
 
 def load_locations(value: object, base_dir: Path, key: str) -> dict[str, Location]:
-    """Locations inline (a mapping) or from a YAML file with a ``locations:`` mapping."""
-    file: str | None = None
+    """Locations inline (a mapping) or from a YAML file with a ``locations:`` mapping;
+    errors in the file name it, with line and column."""
     if isinstance(value, str | Path):
         path = Path(value)
-        if not path.is_absolute():
-            path = base_dir / path
-        file = str(path)
-        loaded = load_yaml_file(path, "locations file", key)
+        path = path if path.is_absolute() else base_dir / path
+        loaded, positions = load_yaml_document(path, "locations file", key)
         if not isinstance(loaded, Mapping) or "locations" not in loaded:
-            raise ConfigError("needs a top-level 'locations:' mapping", key="locations", file=file)
-        value = loaded["locations"]
-        key = "locations"
-    if not isinstance(value, Mapping) or not value:
-        raise ConfigError("must map location names to {x, y, yaw}", key=key, file=file)
-    out: dict[str, Location] = {}
-    for name, spec in value.items():
-        if not isinstance(name, str) or not name.strip():
-            raise ConfigError(f"location names must be strings, got {name!r}", key=key, file=file)
-        lowered = name.strip().lower()
+            raise ConfigError(
+                "needs a top-level 'locations:' mapping", key="locations", file=str(path)
+            )
         try:
-            out[lowered] = parse_location(lowered, spec, f"{key}.{name}")
+            table = validate_settings(_LocationTable, {"locations": loaded["locations"]})
         except ConfigError as exc:
-            if file is None:
-                raise
-            raise ConfigError(str(exc).split(": ", 1)[-1], key=exc.key, file=file) from exc
+            raise positions.relocate(exc) from exc
+    else:
+        prefix = key.rpartition(".")[0] if key.endswith("locations") else key
+        table = validate_settings(_LocationTable, {"locations": value}, key=prefix)
+    out: dict[str, Location] = {}
+    for name, spec in table.locations.items():
+        lowered = name.strip().lower()
+        via = tuple((p[0], p[1]) for p in spec.via)
+        out[lowered] = Location(lowered, spec.x, spec.y, spec.yaw, via)
     return out
+
+
+class _MotionSpec(PluginSettings):
+    robot: int | None = Field(None, ge=0)
+    destination: int = Field(ge=0)
 
 
 def parse_motions(
@@ -276,29 +300,14 @@ def parse_motions(
         name = action.strip().lower()
         where = f"{key}.{action}"
         if isinstance(spec, Mapping):
-            for item in spec:
-                if item not in ("robot", "destination"):
-                    raise ConfigError(
-                        "unknown key (allowed: robot, destination)", key=f"{where}.{item}"
-                    )
-            robot_arg = spec.get("robot")
-            dest_arg = spec.get("destination")
-            for item, index in (("robot", robot_arg), ("destination", dest_arg)):
-                if index is None and item == "robot":
-                    continue
-                if isinstance(index, bool) or not isinstance(index, int) or index < 0:
-                    raise ConfigError(
-                        f"must be a 0-based argument index, got {index!r}", key=f"{where}.{item}"
-                    )
-            assert isinstance(dest_arg, int)
-            if robot_arg == dest_arg:
+            motion = validate_settings(_MotionSpec, spec, key=where)
+            if motion.robot == motion.destination:
                 raise ConfigError("robot and destination are the same argument", key=where)
-            size = max(dest_arg, robot_arg if robot_arg is not None else 0) + 1
-            args = [""] * size
-            if robot_arg is not None:
-                args[robot_arg] = robot
+            args = [""] * (max(motion.destination, motion.robot or 0) + 1)
+            if motion.robot is not None:
+                args[motion.robot] = robot
             specs[name] = tuple(args)
-            motions[name] = MotionAction(robot_arg, dest_arg)
+            motions[name] = MotionAction(motion.robot, motion.destination)
         elif isinstance(spec, list | tuple) and spec:
             args = ["" if a is None else str(a).strip().lower() for a in spec]
             robot_index = args.index(robot) if robot in args else None
@@ -315,178 +324,92 @@ def parse_motions(
     return specs, motions
 
 
-def parse_controller(value: object, key: str) -> ControllerConfig:
-    """Controller gains and limits in one flat mapping."""
-    if value is None:
-        return ControllerConfig()
-    if not isinstance(value, Mapping):
-        raise ConfigError(f"must be a mapping, got {value!r}", key=key)
-    limit_names = {f.name for f in dataclasses.fields(MotionLimits)}
-    limits = parse_dataclass(
-        MotionLimits, {k: v for k, v in value.items() if k in limit_names}, key
-    )
-    rest = {k: v for k, v in value.items() if k not in limit_names}
-    try:
-        return parse_dataclass(ControllerConfig, rest, key, limits=limits)
-    except ConfigError as exc:
-        if "unknown key" in str(exc):
-            allowed = sorted(
-                limit_names | {f.name for f in dataclasses.fields(ControllerConfig)} - {"limits"}
-            )
-            raise ConfigError(f"unknown key (allowed: {', '.join(allowed)})", key=exc.key) from exc
-        raise
-
-
-def parse_bus(value: object, key: str, *, simulated: bool = False) -> BusConfig:
-    if value is None:
-        value = {}
-    if not isinstance(value, Mapping):
-        raise ConfigError(f"must be a mapping, got {value!r}", key=key)
-    allowed = (
-        "interface",
-        "channel",
-        "bitrate",
-        "reader",
-        "poll_period",
-        "send_timeout",
-        "reopen_period",
-        "options",
-    )
-    for item in value:
-        if item not in allowed:
-            raise ConfigError(f"unknown key (allowed: {', '.join(allowed)})", key=f"{key}.{item}")
-    interface = value.get("interface")
-    channel = value.get("channel")
-    if interface is not None and (not isinstance(interface, str) or not interface):
-        raise ConfigError(
-            f"must be a python-can interface name, got {interface!r}", key=f"{key}.interface"
-        )
-    if channel is not None and (not isinstance(channel, str | int) or isinstance(channel, bool)):
-        raise ConfigError(f"must be a channel name, got {channel!r}", key=f"{key}.channel")
-    bitrate = value.get("bitrate")
-    if bitrate is not None and (
-        isinstance(bitrate, bool) or not isinstance(bitrate, int) or bitrate <= 0
-    ):
-        raise ConfigError(f"must be a positive integer, got {bitrate!r}", key=f"{key}.bitrate")
-    reader = value.get("reader", "auto")
-    if reader not in ("auto", "notifier", "poll"):
-        raise ConfigError(f"must be auto, notifier or poll, got {reader!r}", key=f"{key}.reader")
-    options = value.get("options") or {}
-    if not isinstance(options, Mapping):
-        raise ConfigError(f"must be a mapping, got {options!r}", key=f"{key}.options")
-    timing = {
-        name: _positive(value.get(name, default), f"{key}.{name}")
-        for name, default in (("poll_period", 0.005), ("send_timeout", 0.05))
-    }
-    reopen = value.get("reopen_period", 1.0)
-    reopen_period = None if reopen is None else _positive(reopen, f"{key}.reopen_period")
-    try:
-        interface, channel, origin = choose_interface(
-            interface, None if channel is None else str(channel), simulated=simulated
-        )
-    except ValueError as exc:
-        raise ConfigError(str(exc), key=f"{key}.interface") from exc
-    return BusConfig(
-        interface=interface,
-        reopen_period=reopen_period,
-        channel=str(channel),
-        bitrate=bitrate,
-        reader=reader,
-        options=dict(options),
-        origin=origin,
-        **timing,
-    )
-
-
-def _positive(value: object, key: str) -> float:
-    number = _number(value, key)
-    if number <= 0:
-        raise ConfigError(f"must be > 0, got {value!r}", key=key)
-    return number
-
-
-def parse_simulated_base(value: object, bus: BusConfig, key: str) -> BaseDoubleConfig | None:
-    if value is None or value is False:
-        return None
-    if bus.interface != "virtual":
-        raise ConfigError(
-            f"the simulated base runs only on the 'virtual' interface, not {bus.interface!r}; "
-            "remove simulate_base to drive a real base",
-            key=key,
-        )
-    if value is True:
-        return BaseDoubleConfig()
-    if not isinstance(value, Mapping):
-        raise ConfigError(f"must be true or a mapping, got {value!r}", key=key)
-    limit_names = {f.name for f in dataclasses.fields(BaseLimits)}
-    limits = parse_dataclass(BaseLimits, {k: v for k, v in value.items() if k in limit_names}, key)
-    rest = {k: v for k, v in value.items() if k not in limit_names}
-    return parse_dataclass(BaseDoubleConfig, rest, key, limits=limits)
-
-
-def _replay(value: object, bus: BusConfig, base_dir: Path, key: str) -> ReplaySettings | None:
-    if value not in (None, False) and bus.interface != "virtual":
-        raise ConfigError(
-            f"a recorded log is replayed on the 'virtual' interface, not {bus.interface!r}",
-            key=key,
-        )
-    return parse_replay(value, base_dir, key)
-
-
-def parse_settings(
-    settings: Mapping[str, Any], actions: object, base_dir: Path, key: str
-) -> tuple[CanBaseSettings, dict[str, tuple[str, ...]]]:
-    """Check a CAN performer entry's kind-specific keys; returns settings and action specs."""
-    robot = settings.get("robot")
+def robot_name(config: Mapping[str, Any], key: str) -> str:
+    """The entry's ``robot`` (checked again by :class:`CanSettings`), lower case."""
+    robot = config.get("robot")
     if not isinstance(robot, str) or not robot.strip():
         raise ConfigError("the PDDL object this base is (a non-empty string)", key=f"{key}.robot")
-    robot = robot.strip().lower()
-    specs, motions = parse_motions(actions, robot, f"{key}.actions")
-    if "locations" not in settings:
-        raise ConfigError("missing: a locations file or mapping", key=f"{key}.locations")
-    locations = load_locations(settings["locations"], base_dir, f"{key}.locations")
-    replay = settings.get("replay") not in (None, False)
-    if replay and settings.get("simulate_base") not in (None, False):
+    return robot.strip().lower()
+
+
+def resolve(settings: CanSettings, actions: object, base_dir: Path, key: str) -> CanBaseSettings:
+    """The performer's settings: files loaded, the bus chosen (python-can's
+    configuration chain when the entry names no interface)."""
+    robot = settings.robot.strip().lower()
+    _specs, motions = parse_motions(actions, robot, f"{key}.actions")
+    locations = load_locations(settings.locations, base_dir, f"{key}.locations")
+    bus = settings.bus
+    replay = settings.replay not in (None, False)
+    if replay and settings.simulate_base is not None:
         raise ConfigError("a base is either simulated or replayed, not both", key=f"{key}.replay")
-    simulated = replay or settings.get("simulate_base") not in (None, False)
-    bus = parse_bus(settings.get("bus"), f"{key}.bus", simulated=simulated)
-    dbc_value = settings.get("dbc")
-    dbc: Path | None = None
-    if dbc_value is not None:
-        if not isinstance(dbc_value, str):
-            raise ConfigError(f"must be a path, got {dbc_value!r}", key=f"{key}.dbc")
-        dbc = Path(dbc_value) if Path(dbc_value).is_absolute() else base_dir / dbc_value
-    battery_value = settings.get("battery")
-    battery = (
-        None
-        if battery_value is None or battery_value is False
-        else parse_dataclass(
-            BatterySettings, {} if battery_value is True else battery_value, f"{key}.battery"
+    try:
+        interface, channel, origin = choose_interface(
+            bus.interface, bus.channel, simulated=replay or settings.simulate_base is not None
         )
-    )
-    feedback = _positive(settings.get("feedback_period", 0.2), f"{key}.feedback_period")
-    record_period = _positive(settings.get("record_period", 0.1), f"{key}.record_period")
-    record_topic = settings.get("record_topic") or f"/{robot}/pose"
-    if not isinstance(record_topic, str) or not record_topic.startswith("/"):
+    except ValueError as exc:
+        raise ConfigError(str(exc), key=f"{key}.bus.interface") from exc
+    if replay and interface != "virtual":
         raise ConfigError(
-            f"must be a topic name starting with '/', got {record_topic!r}",
-            key=f"{key}.record_topic",
+            f"a recorded log is replayed on the 'virtual' interface, not {interface!r}",
+            key=f"{key}.replay",
         )
-    parsed = CanBaseSettings(
+    if settings.simulate_base is not None and interface != "virtual":
+        raise ConfigError(
+            f"the simulated base runs only on the 'virtual' interface, not {interface!r} "
+            "(from python-can's configuration); remove simulate_base to drive a real base",
+            key=f"{key}.simulate_base",
+        )
+    dbc = None if settings.dbc is None else Path(settings.dbc)
+    if dbc is not None and not dbc.is_absolute():
+        dbc = base_dir / dbc
+    if dbc is not None:
+        try:
+            MobileBaseDbc.load(dbc)  # a missing or broken file is an error of this key
+        except PlansysBridgeError as exc:
+            raise ConfigError(str(exc), key=f"{key}.dbc") from exc
+    return CanBaseSettings(
         robot=robot,
         motions=motions,
         locations=locations,
-        bus=bus,
-        dbc=dbc,
-        controller=parse_controller(settings.get("controller"), f"{key}.controller"),
-        safety=parse_dataclass(SafetySettings, settings.get("safety"), f"{key}.safety"),
-        battery=battery,
-        simulate_base=parse_simulated_base(
-            settings.get("simulate_base"), bus, f"{key}.simulate_base"
+        bus=BusConfig(
+            interface=interface,
+            channel=channel,
+            bitrate=bus.bitrate,
+            reader=bus.reader,
+            poll_period=bus.poll_period,
+            send_timeout=bus.send_timeout,
+            reopen_period=bus.reopen_period,
+            options=dict(bus.options),
+            origin=origin,
         ),
-        replay=_replay(settings.get("replay"), bus, base_dir, f"{key}.replay"),
-        feedback_period=feedback,
-        record_topic=record_topic,
-        record_period=record_period,
+        dbc=dbc,
+        controller=_split(settings.controller, ControllerConfig, MotionLimits, f"{key}.controller"),
+        safety=settings.safety,
+        battery=settings.battery,
+        simulate_base=(
+            None
+            if settings.simulate_base is None
+            else _split(
+                settings.simulate_base, BaseDoubleConfig, BaseLimits, f"{key}.simulate_base"
+            )
+        ),
+        feedback_period=settings.feedback_period,
+        record_topic=settings.record_topic or f"/{robot}/pose",
+        record_period=settings.record_period,
+        replay=parse_replay(settings.replay, base_dir, f"{key}.replay"),
     )
-    return parsed, specs
+
+
+__all__ = [
+    "BatterySettings",
+    "BusSettings",
+    "CanBaseSettings",
+    "CanSettings",
+    "Location",
+    "MotionAction",
+    "SafetySettings",
+    "load_locations",
+    "parse_motions",
+    "resolve",
+    "robot_name",
+]

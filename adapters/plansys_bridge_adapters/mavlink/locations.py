@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from plansys_bridge.errors import ConfigError
-from plansys_bridge.mission_config import load_yaml_file
+from plansys_bridge.yaml_files import load_yaml_file
 
 from .geo import GeoPoint, offset
 

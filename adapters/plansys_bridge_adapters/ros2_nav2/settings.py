@@ -36,7 +36,7 @@ def load_locations(value: object, key: str, base_dir: Path) -> dict[str, Pose2D]
     """``{name: {x, y, yaw}}`` inline, or the name of a YAML file holding that mapping
     (optionally under a ``locations:`` key), relative to the mission file."""
     if isinstance(value, str):
-        from plansys_bridge.mission_config import load_yaml_file
+        from plansys_bridge.yaml_files import load_yaml_file
 
         path = base_dir / value
         value = load_yaml_file(path, "locations file", key)

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from plansys_bridge.errors import ConfigError
-from plansys_bridge.mission_config import load_yaml_file
+from plansys_bridge.yaml_files import load_yaml_file
 
 from ..checks import mapping
 from .errors import BagError

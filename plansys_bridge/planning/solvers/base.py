@@ -1,7 +1,7 @@
 """The solver plugin interface.
 
 A solver declares the PDDL features it plans with (:attr:`Solver.capabilities`) and
-the options it accepts (:attr:`Solver.option_types`); :meth:`Solver.solve` checks
+the options it accepts (its pydantic :attr:`Solver.Settings`); :meth:`Solver.solve` checks
 both, writes the task as PDDL with the project's writer (never the user's original
 text: PlanSys2's files carry terminal commands after the closing parenthesis, which
 strict solvers reject) and delegates to the one method a plugin implements,
@@ -18,11 +18,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
+from pydantic import BaseModel
+
 from plansys_bridge.errors import ConfigError, PlansysBridgeError
 from plansys_bridge.pddl.model import Domain, Problem
 from plansys_bridge.planning.capabilities import Capability, describe, required_capabilities
 from plansys_bridge.planning.plan import Plan
 from plansys_bridge.planning.result import PlanResult, PlanStatus
+from plansys_bridge.plugins import NoSettings, validate_settings
 
 
 @dataclass(frozen=True)
@@ -60,33 +63,24 @@ class Solver(ABC):
 
     name: ClassVar[str] = "solver"
     capabilities: ClassVar[frozenset[Capability]] = frozenset()
-    option_types: ClassVar[Mapping[str, type | tuple[type, ...]]] = {}
-    """Accepted options and their types; anything else is a configuration error."""
+    Settings: ClassVar[type[BaseModel]] = NoSettings
+    """The options a mission's ``planner.options`` may give, as a pydantic model
+    (:class:`~plansys_bridge.plugins.PluginSettings`); anything else is an error."""
+    option_types: ClassVar[Mapping[str, Any]] = {}
+    """The option names and types of ``Settings`` (derived, read-only)."""
     epsilon: ClassVar[float] = 0.001
     """Separation the solver keeps between dependent happenings (for validation)."""
 
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        cls.option_types = {n: f.annotation for n, f in cls.Settings.model_fields.items()}
+
     def __init__(self, options: Mapping[str, Any] | None = None) -> None:
-        self.options: dict[str, Any] = {}
-        for key, value in (options or {}).items():
-            expected = self.option_types.get(key)
-            if expected is None:
-                known = ", ".join(sorted(self.option_types)) or "none"
-                raise ConfigError(
-                    f"unknown option for solver {self.name!r} (known: {known})",
-                    key=f"solvers.{self.name}.{key}",
-                )
-            if isinstance(value, bool) and expected in (int, float, (int, float)):
-                raise ConfigError(
-                    f"expected a number, got {value!r}", key=f"solvers.{self.name}.{key}"
-                )
-            if expected is float and isinstance(value, int):
-                value = float(value)
-            if not isinstance(value, expected):
-                raise ConfigError(
-                    f"expected {_type_name(expected)}, got {value!r}",
-                    key=f"solvers.{self.name}.{key}",
-                )
-            self.options[key] = value
+        self.settings = validate_settings(
+            self.Settings, dict(options or {}), key=f"solvers.{self.name}"
+        )
+        self.options: dict[str, Any] = self.settings.model_dump(exclude_unset=True)
+        """The options given (not the defaults), by name."""
 
     # ------------------------------------------------------------ declarations
 
@@ -147,9 +141,3 @@ class Solver(ABC):
     @abstractmethod
     def _solve(self, task: PlanningTask, timeout: float) -> SolverOutcome:
         """Plan ``task`` within ``timeout`` seconds; the one method a plugin implements."""
-
-
-def _type_name(expected: type | tuple[type, ...]) -> str:
-    if isinstance(expected, tuple):
-        return " or ".join(t.__name__ for t in expected)
-    return expected.__name__

@@ -30,11 +30,14 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import ClassVar
 
+from pydantic import Field
+
 from plansys_bridge.planning.capabilities import ALL_CAPABILITIES, Capability
 from plansys_bridge.planning.plan import Plan, PlanFormatError, PlanStep, parse_plan
 from plansys_bridge.planning.result import PlanStatus
 from plansys_bridge.planning.solvers.base import PlanningTask, Solver, SolverOutcome
 from plansys_bridge.planning.solvers.process import ProcessResult, run_folder, run_process
+from plansys_bridge.plugins import PluginSettings
 
 _PLAN_LINE = re.compile(r"^\s*[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?\s*:\s*\(")
 
@@ -47,6 +50,7 @@ _TEMPORAL = frozenset(
         Capability.EQUALITY,
     }
 )
+
 CLASSICAL_ADL = frozenset(
     {
         Capability.NEGATIVE_PRECONDITIONS,
@@ -80,10 +84,12 @@ class ExternalSolver(Solver):
 
     executables: ClassVar[tuple[str, ...]] = ()
     """Program names looked up on PATH, in order."""
-    option_types: ClassVar[dict[str, type | tuple[type, ...]]] = {
-        "executable": str,
-        "keep_files": bool,
-    }
+
+    class Settings(PluginSettings):
+        executable: str | None = None
+        """The program to run instead of the one found on PATH."""
+        keep_files: bool = False
+        """Keep the run folder (PDDL written, solver output) for a look afterwards."""
 
     def __init__(self, options: dict[str, object] | None = None) -> None:
         super().__init__(options)
@@ -253,10 +259,9 @@ class LpgSolver(ExternalSolver):
             Capability.EQUALITY,
         }
     )
-    option_types: ClassVar[dict[str, type | tuple[type, ...]]] = {
-        **ExternalSolver.option_types,
-        "seed": int,
-    }
+
+    class Settings(ExternalSolver.Settings):
+        seed: int | None = None
 
     bundled = ("up_lpg", "lpg")
     install_hint = "; pip install 'plansys-bridge[planners]' (up-lpg)"
@@ -304,10 +309,10 @@ class FastDownwardSolver(ExternalSolver):
     name = "fast-downward"
     executables = ("fast-downward", "fast-downward.py")
     capabilities: ClassVar[frozenset[Capability]] = CLASSICAL_ADL
-    option_types: ClassVar[dict[str, type | tuple[type, ...]]] = {
-        **ExternalSolver.option_types,
-        "alias": str,
-    }
+
+    class Settings(ExternalSolver.Settings):
+        alias: str | None = None
+
     # https://www.fast-downward.org/ExitCodes
     _UNSOLVABLE = frozenset({10, 11, 12})
     _TIMEOUT = frozenset({21, 23})
@@ -366,10 +371,10 @@ class KairosCliSolver(ExternalSolver):
     name = "kairos-cli"
     executables = ("kairos",)
     capabilities: ClassVar[frozenset[Capability]] = ALL_CAPABILITIES
-    option_types: ClassVar[dict[str, type | tuple[type, ...]]] = {
-        **ExternalSolver.option_types,
-        "threads": int,
-    }
+
+    class Settings(ExternalSolver.Settings):
+        threads: int = Field(1, ge=1)
+
     _STATUS: ClassVar[dict[int, PlanStatus]] = {
         10: PlanStatus.UNSOLVABLE,
         11: PlanStatus.TIMEOUT,

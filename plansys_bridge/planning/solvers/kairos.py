@@ -17,10 +17,13 @@ from __future__ import annotations
 import time
 from typing import Any, ClassVar
 
+from pydantic import Field
+
 from plansys_bridge.planning.capabilities import ALL_CAPABILITIES, Capability
 from plansys_bridge.planning.plan import Plan, PlanStep
 from plansys_bridge.planning.result import PlanStatus
 from plansys_bridge.planning.solvers.base import PlanningTask, Solver, SolverOutcome
+from plansys_bridge.plugins import PluginSettings
 
 _STATUS = {
     "SOLVED": PlanStatus.SOLVED,
@@ -34,15 +37,16 @@ _STATUS = {
 class KairosSolver(Solver):
     name = "kairos"
     capabilities: ClassVar[frozenset[Capability]] = ALL_CAPABILITIES
-    option_types: ClassVar[dict[str, type | tuple[type, ...]]] = {
-        "improve_for": (int, float),
-        "threads": int,
-        "engine": str,
-        "search": str,
-        "epsilon": (int, float),
-        "seed": int,
-        "memory_mb": int,
-    }
+
+    class Settings(PluginSettings):
+        improve_for: float | None = Field(None, ge=0)
+        """Seconds to keep improving the first plan found."""
+        threads: int = Field(1, ge=1)
+        engine: str | None = None
+        search: str | None = None
+        epsilon: float | None = Field(None, gt=0)
+        seed: int | None = None
+        memory_mb: int | None = Field(None, ge=1)
 
     @classmethod
     def unavailable_reason(cls) -> str | None:

@@ -32,6 +32,7 @@ from plansys_bridge.planning.solvers.external import (
     plan_from_lines,
 )
 from plansys_bridge.planning.solvers.process import ProcessResult
+from plansys_bridge.plugins import PluginSettings
 
 _STATUS = {
     up_worker.EXIT_UNSOLVABLE: PlanStatus.UNSOLVABLE,
@@ -49,10 +50,10 @@ class UnifiedPlanningSolver(ExternalSolver):
             return frozenset()  # the named engine decides, and says so when it cannot
         return super().missing_capabilities(required)
 
-    option_types: ClassVar[dict[str, type | tuple[type, ...]]] = {
-        "engine": str,
-        "keep_files": bool,
-    }
+    class Settings(PluginSettings):
+        engine: str | None = None
+        """The unified-planning engine by name (default: the first that fits)."""
+        keep_files: bool = False
 
     @classmethod
     def find_executable(cls, override: str | None = None) -> Path | None:
