@@ -17,7 +17,6 @@ from plansys_bridge.errors import ConfigError, PlansysBridgeError
 from plansys_bridge.plugins import NoSettings, settings_model, validate_settings
 
 if TYPE_CHECKING:
-    from plansys_bridge.performers.base import ActionPerformer
     from plansys_bridge.performers.goal import PerformerContext
 
 __all__ = ["COMMON_KEYS", "PerformerConfig", "construct", "has_settings_model", "parse_entry"]
@@ -51,7 +50,7 @@ def has_settings_model(cls: type) -> bool:
 
 
 def parse_entry(
-    cls: type[ActionPerformer], config: Mapping[str, Any], *, key: str = "performer"
+    cls: Any, config: Mapping[str, Any], *, key: str = "performer"
 ) -> PerformerConfig:
     """Check the common keys and the kind's settings; every error names its key."""
     if not isinstance(config, Mapping):
@@ -87,11 +86,10 @@ def parse_entry(
     )
 
 
-def construct(
-    cls: type[ActionPerformer], entry: PerformerConfig, context: PerformerContext
-) -> ActionPerformer:
-    """``cls(context, name, actions, ..., settings=...)``; a refusal of ``__init__``
-    is a ConfigError naming the entry."""
+def construct(cls: Any, entry: PerformerConfig, context: PerformerContext) -> Any:
+    """``cls(context, name, actions, ..., settings=...)`` for a performer class
+    ``cls`` (not imported here: the base class imports this module); a refusal of
+    ``__init__`` is a ConfigError naming the entry."""
     kwargs = {"settings": entry.settings} if has_settings_model(cls) else dict(entry.settings)
     try:
         return cls(
