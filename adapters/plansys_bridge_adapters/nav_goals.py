@@ -12,17 +12,37 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
+
+from pydantic import Field
 
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.pddl.types import TypeHierarchy
+from plansys_bridge.plugins import PluginSettings
 
 from .checks import mapping
 
 if TYPE_CHECKING:
     from plansys_bridge.knowledge.problem_expert import ProblemExpert
 
-__all__ = ["Pose2D", "check_destinations", "parse_locations", "parse_target_arg"]
+__all__ = [
+    "NavGoalSettings",
+    "Pose2D",
+    "check_destinations",
+    "parse_locations",
+    "parse_target_arg",
+]
+
+
+class NavGoalSettings(PluginSettings):
+    """The keys both navigation performers take (their ``Settings`` extend this)."""
+
+    frame_id: str = Field("map", min_length=1)
+    """The frame of the goal poses."""
+    target_arg: int = -1
+    """The action argument naming the destination (-1 = the last)."""
+    locations: Any = Field(...)
+    """``{name: {x, y, yaw}}``: where each destination is."""
 
 
 @dataclass(frozen=True)

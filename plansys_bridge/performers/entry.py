@@ -49,9 +49,7 @@ def has_settings_model(cls: type) -> bool:
     return model is not None and model is not NoSettings
 
 
-def parse_entry(
-    cls: Any, config: Mapping[str, Any], *, key: str = "performer"
-) -> PerformerConfig:
+def parse_entry(cls: Any, config: Mapping[str, Any], *, key: str = "performer") -> PerformerConfig:
     """Check the common keys and the kind's settings; every error names its key."""
     if not isinstance(config, Mapping):
         raise ConfigError("a performer entry must be a mapping", key=key)

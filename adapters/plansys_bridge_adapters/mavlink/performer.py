@@ -28,7 +28,7 @@ from __future__ import annotations
 import asyncio
 import logging
 from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from dataclasses import replace
 
 from plansys_bridge.clock import VirtualClock
 from plansys_bridge.errors import ConfigError
@@ -38,6 +38,7 @@ from plansys_bridge.performers.base import (
     ActionPerformer,
     PerformerContext,
 )
+from plansys_bridge.performers.entry import PerformerConfig
 
 from .double import VehicleDouble
 from .errors import LinkError, MavlinkError, VehicleFault
@@ -45,11 +46,11 @@ from .geo import GeoPoint, distance_3d_m, distance_m
 from .headway import Headway
 from .safety import PUTS_DOWN, make_safe, make_safe_when_heard, safe_mode_for, stop_safely
 from .settings import (
-    SETTINGS_KEYS,
     Command,
+    MavlinkEntry,
     MavlinkSettings,
     default_command,
-    parse_settings,
+    resolve,
     specialise,
 )
 from .telemetry import TelemetryPublisher
@@ -64,15 +65,15 @@ RECOVERY_WAIT = 600.0
 class MavlinkPerformer(ActionPerformer):
     """Performs take-off, go-to, land, RTL and hold on one ArduPilot vehicle."""
 
-    settings_keys: ClassVar[frozenset[str]] = SETTINGS_KEYS
+    Settings = MavlinkEntry
 
     def __init__(
         self,
         context: PerformerContext,
         node_name: str,
         actions: Mapping[str, Sequence[str]],
-        settings: MavlinkSettings,
         *,
+        settings: MavlinkSettings,
         heartbeat_period: float = 1.0,
         commit_timeout: float = 2.0,
     ) -> None:
@@ -442,29 +443,9 @@ class MavlinkPerformer(ActionPerformer):
 
     # -------------------------------------------------------------- config
     @classmethod
-    def from_config(
-        cls, config: Mapping[str, Any], context: PerformerContext, *, key: str = "performer"
-    ) -> list[ActionPerformer]:
-        parsed = cls.parse_config(config, key=key)
-        settings = parse_settings(parsed.settings, parsed.name, context.base_dir, key)
-        actions = specialise(parsed.actions, settings, key)
-        unknown = set(settings.commands) - set(actions)
-        if unknown:
-            raise ConfigError(
-                f"commands for actions not listed in actions: {', '.join(sorted(unknown))}",
-                key=f"{key}.commands",
-            )
-        try:
-            performer = cls(
-                context,
-                parsed.name,
-                actions,
-                settings,
-                heartbeat_period=parsed.heartbeat_period,
-                commit_timeout=parsed.commit_timeout,
-            )
-        except ConfigError:
-            raise
-        except ValueError as exc:
-            raise ConfigError(str(exc), key=key) from exc
-        return [performer]
+    def prepare(cls, entry: PerformerConfig, context: PerformerContext) -> PerformerConfig:
+        """The vehicle named, the locations loaded, the vehicle's PDDL object put at
+        each command's ``vehicle_arg``."""
+        settings = resolve(entry.settings, entry.name, context.base_dir, entry.key)
+        actions = specialise(entry.actions, settings, entry.key)
+        return replace(entry, settings=settings, actions=actions)

@@ -1,7 +1,9 @@
-"""The kind-specific keys of a ``kind: mavlink`` performer entry, checked.
+"""The kind-specific keys of a ``kind: mavlink`` performer entry, as a pydantic model.
 
-Every mistake is a :class:`ConfigError` naming its key (``performers[1].commands.fly.do``)
-before any link is opened.
+:class:`MavlinkEntry` is the performer's ``Settings``: validated when the mission
+loads, so a mistake (``url: tpc:127.0.0.1:5760``, ``commands.fly.do: hover``) is one
+error naming its key, line and column before any link is opened. :func:`resolve`
+then loads the locations and gives the performer its :class:`MavlinkSettings`.
 """
 
 from __future__ import annotations
@@ -11,54 +13,20 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any, Literal
+
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from plansys_bridge.errors import ConfigError
+from plansys_bridge.plugins import PluginSettings
 
-from ..checks import mapping, positive
 from .locations import LocationMap, load_locations
 from .modes import Model
 from .safety import SAFE_MODES
 from .telemetry import TelemetryConfig
 from .vehicle import DEFAULT_TELEMETRY_HZ
 
-SETTINGS_KEYS = frozenset(
-    {
-        "url",
-        "double",
-        "vehicle",
-        "model",
-        "commands",
-        "locations",
-        "cruise_altitude",
-        "arrival_radius",
-        "altitude_tolerance",
-        "resend_period",
-        "feedback_period",
-        "timeouts",
-        "telemetry",
-        "telemetry_hz",
-        "safe_mode",
-        "disarm_on_stop",
-    }
-)
 DOES = ("takeoff", "goto", "land", "rtl", "hold")
-_COMMAND_KEYS = frozenset({"do", "vehicle_arg", "target_arg", "altitude", "seconds", "takeoff"})
-_DOUBLE_KEYS = frozenset(
-    {
-        "model",
-        "speedup",
-        "transport",
-        "ekf_delay",
-        "home",
-        "disarm_delay",
-        "cruise_speed",
-        "battery_failsafe_pct",
-        "battery_capacity_s",
-        "position_modes_need_ekf",
-    }
-)
-_TIMEOUT_KEYS = frozenset({"connect", "heartbeat", "command", "ekf", "arm", "action", "stall"})
 
 
 @dataclass(frozen=True)
@@ -74,77 +42,73 @@ class Command:
     """goto: a copter on the ground takes off (to ``altitude``) first."""
 
 
-@dataclass(frozen=True)
-class Timeouts:
+class CommandSettings(PluginSettings):
+    """``{do: goto, vehicle_arg: 0, target_arg: 2, ...}`` or just ``goto``."""
+
+    do: Literal["takeoff", "goto", "land", "rtl", "hold"]
+    vehicle_arg: int | None = Field(None, ge=0)
+    """Position of the vehicle's PDDL object among the action's arguments (0 = first)."""
+    target_arg: int = -1
+    """Position of the destination (-1 = the last argument)."""
+    altitude: float | None = Field(None, gt=0)
+    seconds: float | None = Field(None, gt=0)
+    takeoff: bool = False
+
+    @model_validator(mode="before")
+    @classmethod
+    def _short_form(cls, value: object) -> object:
+        return {"do": value} if isinstance(value, str) else value
+
+    @field_validator("takeoff")
+    @classmethod
+    def _takeoff_on_goto(cls, value: bool, info: ValidationInfo) -> bool:
+        if value and info.data.get("do") != "goto":
+            raise ValueError("takeoff applies to a goto command")
+        return value
+
+
+class Timeouts(PluginSettings):
     """Seconds (wall clock): link, heartbeat loss, COMMAND_ACK, EKF, arming, one action."""
 
-    connect: float = 30.0
-    heartbeat: float = 3.0
-    command: float = 1.0
-    ekf: float = 120.0
-    arm: float = 30.0
-    action: float = 600.0
-    stall: float = 20.0
+    connect: float = Field(30.0, gt=0)
+    heartbeat: float = Field(3.0, gt=0)
+    command: float = Field(1.0, gt=0)
+    ekf: float = Field(120.0, gt=0)
+    arm: float = Field(30.0, gt=0)
+    action: float = Field(600.0, gt=0)
+    stall: float = Field(20.0, gt=0)
     """Seconds of the vehicle's own time a go-to may go without getting closer."""
 
 
-@dataclass(frozen=True)
-class MavlinkSettings:
-    """The kind-specific keys of a mavlink performer entry, checked."""
-
-    vehicle: str
-    url: str | None = None
-    double: Mapping[str, Any] | None = None
-    model: Model | None = None
-    commands: Mapping[str, Command] = field(default_factory=dict)
-    locations: LocationMap | None = None
-    cruise_altitude: float = 10.0
-    arrival_radius: float = 1.0
-    altitude_tolerance: float = 0.5
-    resend_period: float = 1.0
-    feedback_period: float = 0.2
-    timeouts: Timeouts = field(default_factory=Timeouts)
-    telemetry: TelemetryConfig = field(default_factory=TelemetryConfig)
-    telemetry_hz: Mapping[str, float] = field(default_factory=lambda: dict(DEFAULT_TELEMETRY_HZ))
-    safe_mode: str | None = None
-    """Mode for a vehicle still in GUIDED after a failed action or at the end
-    (copter LAND, RTL, BRAKE, ...; rover HOLD, ...); None: the model's default."""
-    disarm_on_stop: bool = True
-    """Disarm a vehicle left armed on the ground when the performer stops."""
+class HomeSettings(PluginSettings):
+    lat: float = Field(ge=-90, le=90)
+    lon: float = Field(ge=-180, le=180)
+    alt: float = 584.0
 
 
-def default_command(action: str) -> Command:
-    """What an action does when ``commands`` does not say: by name, else a go-to."""
-    name = action.lower()
-    if name in ("takeoff", "take_off", "take-off"):
-        return Command("takeoff")
-    if name in ("land", "rtl", "hold"):
-        return Command(name)
-    if name in ("return_to_launch", "return-to-launch", "return_home"):
-        return Command("rtl")
-    return Command("goto")
+class DoubleSettings(PluginSettings):
+    """``double:`` the simulated vehicle started in-process instead of a link."""
+
+    model: Model = "copter"
+    speedup: float | None = Field(None, gt=0)
+    transport: Literal["tcp", "udp"] | None = None
+    ekf_delay: float | None = Field(None, gt=0)
+    home: HomeSettings | None = None
+    disarm_delay: float | None = Field(None, gt=0)
+    cruise_speed: float | None = Field(None, gt=0)
+    battery_failsafe_pct: float | None = Field(None, ge=0, le=100)
+    battery_capacity_s: float | None = Field(None, gt=0)
+    position_modes_need_ekf: bool | None = None
 
 
-def specialise(
-    actions: Mapping[str, tuple[str, ...]], settings: MavlinkSettings, key: str
-) -> dict[str, tuple[str, ...]]:
-    """Put the vehicle's PDDL name at each command's ``vehicle_arg`` position."""
-    out: dict[str, tuple[str, ...]] = {}
-    for action, spec in actions.items():
-        args = list(spec)
-        cmd = settings.commands.get(action)
-        if cmd is not None and cmd.vehicle_arg is not None:
-            i = cmd.vehicle_arg
-            args += [""] * (i + 1 - len(args))
-            if args[i] not in ("", settings.vehicle):
-                raise ConfigError(
-                    f"argument {i} is the vehicle ({settings.vehicle}) but actions.{action} "
-                    f"specialises it to {args[i]!r}",
-                    key=f"{key}.commands.{action}.vehicle_arg",
-                )
-            args[i] = settings.vehicle
-        out[action] = tuple(args)
-    return out
+class TelemetrySettings(PluginSettings):
+    """``telemetry:`` the battery written into the knowledge (:class:`TelemetryConfig`)."""
+
+    battery_function: str | None = Field(None, pattern=r"\S")
+    low_battery_predicate: str | None = Field(None, pattern=r"\S")
+    low_battery_threshold: float = Field(25.0, ge=0)
+    hysteresis: float = Field(5.0, ge=0)
+    battery_step: float = Field(1.0, ge=0)
 
 
 NETWORK_SCHEMES = ("tcp", "tcpin", "udp", "udpin", "udpout", "udpbcast")
@@ -173,135 +137,159 @@ def url_problem(url: str) -> str | None:
     return f"unknown link scheme {scheme!r}{hint} (known: {known} or a device path)"
 
 
-def parse_settings(raw: Mapping[str, Any], name: str, base_dir: Path, key: str) -> MavlinkSettings:
-    """Check the kind-specific keys; every error names its key."""
-    values: dict[str, Any] = {}
-    vehicle = raw.get("vehicle", name)
-    if not isinstance(vehicle, str) or not vehicle.strip():
-        raise ConfigError(
-            f"must be the vehicle's PDDL object name, got {vehicle!r}", key=f"{key}.vehicle"
-        )
-    values["vehicle"] = vehicle.strip().lower()
-    url, double = raw.get("url"), raw.get("double")
-    if (url is None) == (double is None):
-        raise ConfigError(
-            "give exactly one of url (tcp:HOST:PORT, udpin:..., serial:...) "
-            "and double ({model: copter})",
-            key=f"{key}.url",
-        )
-    if url is not None:
-        if not isinstance(url, str) or not url.strip():
-            raise ConfigError(
-                f"must be a MAVLink URL like tcp:127.0.0.1:5760, got {url!r}", key=f"{key}.url"
+class MavlinkEntry(PluginSettings):
+    """The kind-specific keys of a mavlink performer entry."""
+
+    vehicle: str | None = Field(None, pattern=r"\S")
+    """The vehicle's PDDL object (default: the performer's name)."""
+    double: DoubleSettings | None = None
+    url: str | None = Field(None, validate_default=True)
+    """The link: tcp:HOST:PORT, udpin:..., serial:... (or ``double`` instead)."""
+    model: Model | None = None
+    commands: dict[str, CommandSettings] = Field(default_factory=dict)
+    locations: str | dict[str, Any] | None = None
+    """A locations file or the mapping itself (:mod:`.locations`)."""
+    cruise_altitude: float = Field(10.0, gt=0)
+    arrival_radius: float = Field(1.0, gt=0)
+    altitude_tolerance: float = Field(0.5, gt=0)
+    resend_period: float = Field(1.0, gt=0)
+    feedback_period: float = Field(0.2, gt=0)
+    timeouts: Timeouts = Field(default_factory=Timeouts)
+    telemetry: TelemetrySettings = Field(default_factory=TelemetrySettings)
+    telemetry_hz: dict[str, Annotated[float, Field(gt=0)]] | None = None
+    """MAVLink message name -> rate in Hz the vehicle is asked to stream it at."""
+    safe_mode: str | None = None
+    """Mode for a vehicle still in GUIDED after a failed action or at the end
+    (copter LAND, RTL, BRAKE, ...; rover HOLD, ...); None: the model's default."""
+    disarm_on_stop: bool = True
+    """Disarm a vehicle left armed on the ground when the performer stops."""
+
+    @field_validator("url")
+    @classmethod
+    def _one_link(cls, value: str | None, info: ValidationInfo) -> str | None:
+        if (value is None) == (info.data.get("double") is None):
+            raise ValueError(
+                "give exactly one of url (tcp:HOST:PORT, udpin:..., serial:...) "
+                "and double ({model: copter})"
             )
-        values["url"] = url.strip()
-        problem = url_problem(values["url"])
-        if problem:
-            raise ConfigError(f"{values['url']}: {problem}", key=f"{key}.url")
-    if double is not None:
-        values["double"] = _double(double, f"{key}.double")
-    model = raw.get("model")
-    if model is not None:
-        if model not in ("copter", "rover"):
-            raise ConfigError(f"must be copter or rover, got {model!r}", key=f"{key}.model")
-        values["model"] = model
-    commands = raw.get("commands") or {}
-    if not isinstance(commands, Mapping):
-        raise ConfigError("must map action names to {do: ...}", key=f"{key}.commands")
-    values["commands"] = {
-        str(a).lower(): _command(c, f"{key}.commands.{a}") for a, c in commands.items()
-    }
-    if raw.get("locations") is not None:
-        spec = raw["locations"]
-        if not isinstance(spec, str | Mapping):
-            raise ConfigError("must be a file name or a mapping", key=f"{key}.locations")
-        values["locations"] = load_locations(spec, base_dir, f"{key}.locations")
-    for name_ in (
-        "cruise_altitude",
-        "arrival_radius",
-        "altitude_tolerance",
-        "resend_period",
-        "feedback_period",
-    ):
-        if name_ in raw:
-            values[name_] = positive(raw[name_], f"{key}.{name_}")
-    timeouts = mapping(
-        raw.get("timeouts") or {},
-        f"{key}.timeouts",
-        _TIMEOUT_KEYS,
-        "must be a mapping of seconds, e.g. {ekf: 120}",
-    )
-    values["timeouts"] = Timeouts(
-        **{t: positive(v, f"{key}.timeouts.{t}") for t, v in timeouts.items()}
-    )
-    values["telemetry"] = TelemetryConfig.from_mapping(raw.get("telemetry"), f"{key}.telemetry")
-    if raw.get("telemetry_hz") is not None:
-        hz = raw["telemetry_hz"]
-        if not isinstance(hz, Mapping):
-            raise ConfigError(
-                "must map MAVLink message names to rates in Hz", key=f"{key}.telemetry_hz"
+        if value is not None:
+            value = value.strip()
+            problem = (
+                url_problem(value) if value else "must be a MAVLink URL like tcp:127.0.0.1:5760"
             )
-        values["telemetry_hz"] = {
-            str(m).upper(): positive(r, f"{key}.telemetry_hz.{m}") for m, r in hz.items()
-        }
-    if raw.get("safe_mode") is not None:
-        values["safe_mode"] = _safe_mode(raw["safe_mode"], values.get("model"), f"{key}.safe_mode")
-    if "disarm_on_stop" in raw:
-        flag = raw["disarm_on_stop"]
-        if not isinstance(flag, bool):
-            raise ConfigError(f"must be true or false, got {flag!r}", key=f"{key}.disarm_on_stop")
-        values["disarm_on_stop"] = flag
-    return MavlinkSettings(**values)
+            if problem:
+                raise ValueError(f"{value}: {problem}" if value else problem)
+        return value
+
+    @field_validator("safe_mode")
+    @classmethod
+    def _known_mode(cls, value: str | None, info: ValidationInfo) -> str | None:
+        if value is None:
+            return None
+        model = info.data.get("model")
+        models: tuple[Model, ...] = (model,) if model is not None else ("copter", "rover")
+        allowed = sorted({m for each in models for m in SAFE_MODES[each]})
+        if value.upper() not in allowed:
+            raise ValueError(f"must be one of {', '.join(allowed)}, got {value!r}")
+        return value.upper()
 
 
-def _safe_mode(value: object, model: Model | None, key: str) -> str:
-    models: tuple[Model, ...] = (model,) if model is not None else ("copter", "rover")
-    allowed = sorted({m for each in models for m in SAFE_MODES[each]})
-    name = value.upper() if isinstance(value, str) else value
-    if name not in allowed:
-        raise ConfigError(f"must be one of {', '.join(allowed)}, got {value!r}", key=key)
-    return str(name)
+@dataclass(frozen=True)
+class MavlinkSettings:
+    """What the performer runs with: :class:`MavlinkEntry` with the vehicle named and
+    the locations loaded."""
+
+    vehicle: str
+    url: str | None = None
+    double: Mapping[str, Any] | None = None
+    model: Model | None = None
+    commands: Mapping[str, Command] = field(default_factory=dict)
+    locations: LocationMap | None = None
+    cruise_altitude: float = 10.0
+    arrival_radius: float = 1.0
+    altitude_tolerance: float = 0.5
+    resend_period: float = 1.0
+    feedback_period: float = 0.2
+    timeouts: Timeouts = field(default_factory=Timeouts)
+    telemetry: TelemetryConfig = field(default_factory=TelemetryConfig)
+    telemetry_hz: Mapping[str, float] = field(default_factory=lambda: dict(DEFAULT_TELEMETRY_HZ))
+    safe_mode: str | None = None
+    disarm_on_stop: bool = True
 
 
-def _command(value: object, key: str) -> Command:
-    if isinstance(value, str):
-        value = {"do": value}
-    value = mapping(value, key, _COMMAND_KEYS, f"must be {{do: one of {', '.join(DOES)}, ...}}")
-    do = value.get("do")
-    if do not in DOES:
-        raise ConfigError(f"must be one of {', '.join(DOES)}, got {do!r}", key=f"{key}.do")
-    fields: dict[str, Any] = {"do": do}
-    for k in ("vehicle_arg", "target_arg"):
-        if k in value:
-            v = value[k]
-            if isinstance(v, bool) or not isinstance(v, int) or (k == "vehicle_arg" and v < 0):
+def default_command(action: str) -> Command:
+    """What an action does when ``commands`` does not say: by name, else a go-to."""
+    name = action.lower()
+    if name in ("takeoff", "take_off", "take-off"):
+        return Command("takeoff")
+    if name in ("land", "rtl", "hold"):
+        return Command(name)
+    if name in ("return_to_launch", "return-to-launch", "return_home"):
+        return Command("rtl")
+    return Command("goto")
+
+
+def resolve(entry: MavlinkEntry, name: str, base_dir: Path, key: str) -> MavlinkSettings:
+    """The performer's settings from its validated entry: files loaded, names
+    normalised (PDDL names lower case, MAVLink message names upper case)."""
+    double = None
+    if entry.double is not None:
+        double = entry.double.model_dump(exclude_none=True)
+    telemetry = entry.telemetry.model_dump()
+    for fluent in ("battery_function", "low_battery_predicate"):
+        if telemetry[fluent] is not None:
+            telemetry[fluent] = telemetry[fluent].strip().lower()
+    hz = entry.telemetry_hz
+    return MavlinkSettings(
+        vehicle=(entry.vehicle or name).strip().lower(),
+        url=entry.url,
+        double=double,
+        model=entry.model,
+        commands={a.lower(): Command(**c.model_dump()) for a, c in entry.commands.items()},
+        locations=(
+            None
+            if entry.locations is None
+            else load_locations(entry.locations, base_dir, f"{key}.locations")
+        ),
+        cruise_altitude=entry.cruise_altitude,
+        arrival_radius=entry.arrival_radius,
+        altitude_tolerance=entry.altitude_tolerance,
+        resend_period=entry.resend_period,
+        feedback_period=entry.feedback_period,
+        timeouts=entry.timeouts,
+        telemetry=TelemetryConfig(**telemetry),
+        telemetry_hz=dict(DEFAULT_TELEMETRY_HZ)
+        if hz is None
+        else {m.upper(): r for m, r in hz.items()},
+        safe_mode=entry.safe_mode,
+        disarm_on_stop=entry.disarm_on_stop,
+    )
+
+
+def specialise(
+    actions: Mapping[str, tuple[str, ...]], settings: MavlinkSettings, key: str
+) -> dict[str, tuple[str, ...]]:
+    """Put the vehicle's PDDL name at each command's ``vehicle_arg`` position; every
+    command must be for an action the performer serves."""
+    unknown = set(settings.commands) - set(actions)
+    if unknown:
+        raise ConfigError(
+            f"commands for actions not listed in actions: {', '.join(sorted(unknown))}",
+            key=f"{key}.commands",
+        )
+    out: dict[str, tuple[str, ...]] = {}
+    for action, spec in actions.items():
+        args = list(spec)
+        cmd = settings.commands.get(action)
+        if cmd is not None and cmd.vehicle_arg is not None:
+            i = cmd.vehicle_arg
+            args += [""] * (i + 1 - len(args))
+            if args[i] not in ("", settings.vehicle):
                 raise ConfigError(
-                    f"must be an argument position (0 = first), got {v!r}", key=f"{key}.{k}"
+                    f"argument {i} is the vehicle ({settings.vehicle}) but actions.{action} "
+                    f"specialises it to {args[i]!r}",
+                    key=f"{key}.commands.{action}.vehicle_arg",
                 )
-            fields[k] = v
-    for k in ("altitude", "seconds"):
-        if k in value:
-            fields[k] = positive(value[k], f"{key}.{k}")
-    if "takeoff" in value:
-        if not isinstance(value["takeoff"], bool) or do != "goto":
-            raise ConfigError(
-                f"must be true or false, on a goto command, got {value['takeoff']!r}",
-                key=f"{key}.takeoff",
-            )
-        fields["takeoff"] = value["takeoff"]
-    return Command(**fields)
-
-
-def _double(value: object, key: str) -> dict[str, Any]:
-    hint = "must be a mapping like {model: copter, speedup: 5}"
-    out = dict(mapping(value, key, _DOUBLE_KEYS, hint))
-    if out.get("model", "copter") not in ("copter", "rover"):
-        raise ConfigError(f"must be copter or rover, got {out['model']!r}", key=f"{key}.model")
-    for k in ("speedup", "ekf_delay", "disarm_delay", "cruise_speed", "battery_capacity_s"):
-        if k in out:
-            out[k] = positive(out[k], f"{key}.{k}")
-    if "home" in out:
-        home = out["home"]
-        if not isinstance(home, Mapping) or "lat" not in home or "lon" not in home:
-            raise ConfigError("must be {lat: .., lon: .., alt: ..}", key=f"{key}.home")
+            args[i] = settings.vehicle
+        out[action] = tuple(args)
     return out

@@ -21,9 +21,9 @@ import logging
 import math
 import time
 from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from dataclasses import replace
+from typing import Any
 
-from plansys_bridge.errors import ConfigError
 from plansys_bridge.hub.messages import PerformerState
 from plansys_bridge.performers.base import (
     ActionFailed,
@@ -31,10 +31,11 @@ from plansys_bridge.performers.base import (
     ActionPerformer,
     PerformerContext,
 )
+from plansys_bridge.performers.entry import PerformerConfig
 from plansys_bridge.ros1.actionlib import ActionClient, GoalHandle, GoalStatus
 from plansys_bridge.ros1.node import Node
 
-from .settings import SETTINGS_KEYS, MoveBaseSettings, Pose2D, check_destinations, parse_settings
+from .settings import MoveBaseEntry, MoveBaseSettings, Pose2D, check_destinations, resolve
 
 __all__ = ["MoveBasePerformer"]
 
@@ -44,7 +45,7 @@ log = logging.getLogger(__name__)
 class MoveBasePerformer(ActionPerformer):
     """Drives move_base through actionlib; one goal per action."""
 
-    settings_keys: ClassVar[frozenset[str]] = SETTINGS_KEYS
+    Settings = MoveBaseEntry
     ready_period = 0.5
     """Seconds between two checks of the master and the action server."""
     server_grace = 5.0
@@ -206,23 +207,8 @@ class MoveBasePerformer(ActionPerformer):
     # ------------------------------------------------------------ config
 
     @classmethod
-    def from_config(
-        cls, config: Mapping[str, Any], context: PerformerContext, *, key: str = "performer"
-    ) -> list[ActionPerformer]:
-        parsed = cls.parse_config(config, key=key)
-        settings = parse_settings(parsed.settings, key)
-        check_destinations(settings, parsed.actions, context.knowledge, key)
-        try:
-            performer = cls(
-                context,
-                parsed.name,
-                parsed.actions,
-                settings,
-                heartbeat_period=parsed.heartbeat_period,
-                commit_timeout=parsed.commit_timeout,
-            )
-        except ConfigError:
-            raise
-        except ValueError as exc:
-            raise ConfigError(str(exc), key=key) from exc
-        return [performer]
+    def prepare(cls, entry: PerformerConfig, context: PerformerContext) -> PerformerConfig:
+        """The master and namespace checked; every destination has a location."""
+        settings = resolve(entry.settings, entry.key)
+        check_destinations(settings, entry.actions, context.knowledge, entry.key)
+        return replace(entry, settings=settings)

@@ -19,20 +19,26 @@ one is an error naming the key when the mission loads, not a failure mid-mission
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+
+from pydantic import Field
 
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.ros1.errors import Ros1Error
 from plansys_bridge.ros1.master import check_uri
 from plansys_bridge.ros1.node import DEFAULT_MASTER_URI, resolve_topic
 
-from ..nav_goals import Pose2D, check_destinations, parse_locations, parse_target_arg
+from ..nav_goals import NavGoalSettings, Pose2D, check_destinations, parse_locations
 
-__all__ = ["SETTINGS_KEYS", "MoveBaseSettings", "Pose2D", "check_destinations", "parse_settings"]
+__all__ = ["MoveBaseEntry", "MoveBaseSettings", "Pose2D", "check_destinations", "resolve"]
 
-SETTINGS_KEYS = frozenset({"master_uri", "action_ns", "frame_id", "target_arg", "locations"})
+
+class MoveBaseEntry(NavGoalSettings):
+    """The kind-specific keys of a ``ros1_move_base`` entry."""
+
+    master_uri: str | None = Field(None, min_length=1)
+    """Default: ``$ROS_MASTER_URI``, else the local master."""
+    action_ns: str = Field("/move_base", min_length=1)
 
 
 @dataclass(frozen=True)
@@ -44,22 +50,16 @@ class MoveBaseSettings:
     locations: dict[str, Pose2D]
 
 
-def _string(value: object, key: str) -> str:
-    if not isinstance(value, str) or not value.strip():
-        raise ConfigError(f"must be a non-empty string, got {value!r}", key=key)
-    return value.strip()
-
-
-def parse_settings(raw: Mapping[str, Any], key: str) -> MoveBaseSettings:
-    """Check the kind-specific keys; every error names its key."""
-    master = raw.get("master_uri") or os.environ.get("ROS_MASTER_URI") or DEFAULT_MASTER_URI
+def resolve(entry: MoveBaseEntry, key: str) -> MoveBaseSettings:
+    """The master's URI and the action namespace checked, the locations read."""
+    master = entry.master_uri or os.environ.get("ROS_MASTER_URI") or DEFAULT_MASTER_URI
     try:
-        master_uri = check_uri(_string(master, f"{key}.master_uri"))
-        action_ns = resolve_topic(_string(raw.get("action_ns", "/move_base"), f"{key}.action_ns"))
+        master_uri = check_uri(master.strip())
     except Ros1Error as exc:
-        which = "master_uri" if "master_uri" in str(exc) else "action_ns"
-        raise ConfigError(str(exc), key=f"{key}.{which}") from exc
-    frame_id = _string(raw.get("frame_id", "map"), f"{key}.frame_id")
-    target = parse_target_arg(raw.get("target_arg", -1), f"{key}.target_arg")
-    locations = parse_locations(raw.get("locations"), f"{key}.locations")
-    return MoveBaseSettings(master_uri, action_ns, frame_id, target, locations)
+        raise ConfigError(str(exc), key=f"{key}.master_uri") from exc
+    try:
+        action_ns = resolve_topic(entry.action_ns.strip())
+    except Ros1Error as exc:
+        raise ConfigError(str(exc), key=f"{key}.action_ns") from exc
+    locations = parse_locations(entry.locations, f"{key}.locations")
+    return MoveBaseSettings(master_uri, action_ns, entry.frame_id, entry.target_arg, locations)

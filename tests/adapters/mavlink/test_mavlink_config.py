@@ -64,13 +64,13 @@ def test_actions_without_commands_do_what_their_name_says() -> None:
     [
         ({"url": None}, "performers[0].url", "exactly one of url"),
         ({"double": {"model": "copter"}}, "performers[0].url", "exactly one of url"),
-        ({"url": 5760}, "performers[0].url", "must be a MAVLink URL"),
+        ({"url": 5760}, "performers[0].url", "valid string, got 5760"),
         ({"colour": "red"}, "performers[0].colour", "unknown key"),
-        ({"model": "plane"}, "performers[0].model", "copter or rover"),
+        ({"model": "plane"}, "performers[0].model", "'copter' or 'rover', got 'plane'"),
         (
             {"commands": {"fly": {"do": "teleport"}}},
             "performers[0].commands.fly.do",
-            "must be one of",
+            "'hold', got 'teleport'",
         ),
         (
             {"commands": {"fly": {"do": "goto", "target": 2}}},
@@ -80,7 +80,7 @@ def test_actions_without_commands_do_what_their_name_says() -> None:
         (
             {"commands": {"fly": {"do": "goto", "vehicle_arg": -1}}},
             "performers[0].commands.fly.vehicle_arg",
-            "argument position",
+            "greater than or equal to 0, got -1",
         ),
         ({"commands": {"swim": "goto"}}, "performers[0].commands", "not listed in actions"),
         (
@@ -88,13 +88,13 @@ def test_actions_without_commands_do_what_their_name_says() -> None:
             "performers[0].commands.fly.vehicle_arg",
             "specialises it to 'uav2'",
         ),
-        ({"timeouts": {"ekf": 0}}, "performers[0].timeouts.ekf", "number > 0"),
+        ({"timeouts": {"ekf": 0}}, "performers[0].timeouts.ekf", "greater than 0, got 0"),
         ({"timeouts": {"boot": 3}}, "performers[0].timeouts.boot", "unknown key"),
         ({"telemetry": {"battery": "b"}}, "performers[0].telemetry.battery", "unknown key"),
         (
             {"telemetry": {"low_battery_threshold": -1}},
             "performers[0].telemetry.low_battery_threshold",
-            ">= 0",
+            "greater than or equal to 0, got -1",
         ),
         (
             {"locations": {"locations": {"a": {"north": "far"}}}},
@@ -109,9 +109,9 @@ def test_actions_without_commands_do_what_their_name_says() -> None:
         (
             {"url": None, "double": {"model": "copter", "speedup": -3}},
             "performers[0].double.speedup",
-            "number > 0",
+            "greater than 0, got -3",
         ),
-        ({"cruise_altitude": "high"}, "performers[0].cruise_altitude", "number > 0"),
+        ({"cruise_altitude": "high"}, "performers[0].cruise_altitude", "valid number, got .high."),
     ],
 )
 def test_config_errors_name_the_key(changes: dict[str, Any], key: str, message: str) -> None:
