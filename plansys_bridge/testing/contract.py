@@ -64,6 +64,9 @@ class PerformerContract:
     """Seconds (mission time) from CANCEL until the performer is idle again."""
     action_timeout: ClassVar[float] = 600.0
     """Seconds (mission time) the goal may take."""
+    ready_within: ClassVar[float] = 30.0
+    """Seconds (mission time) from start until the performer says READY (a link to
+    open, a peer to find)."""
 
     # ------------------------------------------------------------ hooks
 
@@ -108,6 +111,14 @@ class PerformerContract:
             await hub.clock.sleep(0.01)
         return True
 
+    async def _start(self, hub: Hub, performer: ActionPerformer) -> None:
+        """Start the performer and wait until its heartbeat says READY."""
+        await performer.start()
+        ready = await self._until(
+            hub, lambda: performer.state == PerformerState.READY, self.ready_within
+        )
+        assert ready, f"{performer.node_name} not READY {self.ready_within} s after start"
+
     # ------------------------------------------------------------ the contract
 
     def test_contract_kind_is_registered(self) -> None:
@@ -123,7 +134,7 @@ class PerformerContract:
                     states.append(PerformerState(msg.state))
 
             sub = hub.subscribe(Topics.PERFORMERS_STATUS, on_status)
-            await performer.start()
+            await self._start(hub, performer)
             await hub.clock.sleep(performer.heartbeat_period * 3.5)
             assert states.count(PerformerState.READY) >= 3, f"heartbeats: {states}"
             await performer.stop()
@@ -146,7 +157,7 @@ class PerformerContract:
                     answers.append(msg)
 
             sub = hub.subscribe(Topics.ACTIONS_HUB, on_msg)
-            await performer.start()
+            await self._start(hub, performer)
             action, args = self.goal
             asks = [("not_offered_action_x", args, "unoffered")]
             spec = performer.actions.get(action, ())
@@ -179,7 +190,7 @@ class PerformerContract:
         async def body(hub: Hub, performer: ActionPerformer) -> None:
             seen: list[ActionExecution] = []
             sub = hub.subscribe(Topics.ACTIONS_HUB, _collect(seen, performer.node_name))
-            await performer.start()
+            await self._start(hub, performer)
             client = ActionClient(hub, *self.goal)
             outcome = await asyncio.wait_for(client.run(), self.action_timeout)
             await hub.clock.sleep(1.0)
@@ -196,7 +207,7 @@ class PerformerContract:
 
     def test_contract_cancel_is_honoured(self) -> None:
         async def body(hub: Hub, performer: ActionPerformer) -> None:
-            await performer.start()
+            await self._start(hub, performer)
             client = ActionClient(hub, *self.goal)
             task = asyncio.ensure_future(client.run())
             started = await self._until(hub, lambda: performer.busy, self.action_timeout)
@@ -218,7 +229,7 @@ class PerformerContract:
         failing = self.failing_goal
 
         async def body(hub: Hub, performer: ActionPerformer) -> None:
-            await performer.start()
+            await self._start(hub, performer)
             outcome = await asyncio.wait_for(ActionClient(hub, *failing).run(), self.action_timeout)
             assert not outcome.success
             assert outcome.status.strip(), "a failure must say why"

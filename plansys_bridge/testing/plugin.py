@@ -1,7 +1,8 @@
-"""pytest plugin (entry point ``pytest11``): marks the performer contract tests.
+"""pytest plugin (entry point ``pytest11``): marks the contract tests.
 
-Every test inherited from :class:`~plansys_bridge.testing.PerformerContract` gets the
-``contract`` marker, so ``pytest -m contract`` runs just the contract of an adapter.
+Every test inherited from a contract of :mod:`plansys_bridge.testing` (performer,
+solver, transport) gets the ``contract`` marker, so ``pytest -m contract`` runs just
+the contract of a plugin package.
 """
 
 from __future__ import annotations
@@ -10,15 +11,16 @@ import pytest
 
 
 def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "contract: a contract test (plansys_bridge.testing)")
     config.addinivalue_line(
-        "markers", "contract: a performer contract test (plansys_bridge.testing)"
+        "markers", "allow_asyncio_errors: the test provokes errors the asyncio logger reports"
     )
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    from plansys_bridge.testing.contract import PerformerContract
-
     for item in items:
         cls = getattr(item, "cls", None)
-        if cls is not None and issubclass(cls, PerformerContract):
+        if cls is not None and any(
+            base.__module__.startswith("plansys_bridge.testing.") for base in cls.__mro__[1:]
+        ):
             item.add_marker(pytest.mark.contract)

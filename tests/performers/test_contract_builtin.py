@@ -4,11 +4,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from plansys_bridge.clock import Clock, WallClock
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.performers.base import PerformerContext
 from plansys_bridge.testing import PerformerContract
 
 BAGS = Path(__file__).resolve().parents[2] / "bags"
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
 
 class TestSimulatedContract(PerformerContract):
@@ -65,3 +67,35 @@ class TestRosbagContract(PerformerContract):
 
     def make_context(self, hub: Hub) -> PerformerContext:
         return PerformerContext(hub=hub, clock=hub.clock, base_dir=BAGS)
+
+
+class TestMavlinkContract(PerformerContract):
+    """The MAVLink performer driving the vehicle double (a rover, 10x speed) over TCP."""
+
+    entry = {
+        "kind": "mavlink",
+        "name": "rover1",
+        "vehicle": "r1",
+        "double": {"model": "rover", "speedup": 10, "ekf_delay": 1.0},
+        "locations": "mavlink_locations.yaml",
+        "actions": {"drive": []},
+        "commands": {"drive": {"do": "goto", "vehicle_arg": 0, "target_arg": 2}},
+        "heartbeat_period": 0.2,
+        "feedback_period": 0.05,
+        "timeouts": {"heartbeat": 2.0, "command": 1.0, "ekf": 30, "arm": 10, "action": 60},
+    }
+    goal = ("drive", ("r1", "yard", "east_field"))
+    failing_goal = ("drive", ("r1", "yard", "moon"))
+    bad_settings = [
+        ({"double": None, "url": "tpc:127.0.0.1:5760"}, "url"),
+        ({"timeouts": {"ekf": 0}}, "timeouts.ekf"),
+        ({"commands": {"drive": {"do": "teleport"}}}, "commands.drive.do"),
+    ]
+    cancel_within = 10.0
+    action_timeout = 90.0
+
+    def make_clock(self) -> Clock:
+        return WallClock()  # a vehicle runs in real time
+
+    def make_context(self, hub: Hub) -> PerformerContext:
+        return PerformerContext(hub=hub, clock=hub.clock, base_dir=CONFIGS)
