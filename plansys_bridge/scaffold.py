@@ -47,9 +47,12 @@ PERFORMER = '''\
 from __future__ import annotations
 
 import asyncio
-from typing import Any, ClassVar
+from typing import Any
+
+from pydantic import Field
 
 from plansys_bridge.performers.base import ActionFailed, ActionGoal, ActionPerformer
+from plansys_bridge.plugins import PluginSettings
 
 
 class {cls}(ActionPerformer):
@@ -59,16 +62,17 @@ class {cls}(ActionPerformer):
     ``self.clock.sleep`` waits (they make the virtual clock work) and the feedback.
     """
 
-    settings_keys: ClassVar[frozenset[str]] = frozenset({{"step_time", "steps"}})
+    class Settings(PluginSettings):
+        """The mission-file keys of ``kind: {name}`` besides kind, name and actions;
+        checked when the mission loads, errors naming file, line and key."""
 
-    def __init__(self, *args: Any, step_time: float = 0.5, steps: int = 4, **kwargs: Any) -> None:
+        step_time: float = Field(0.5, gt=0)
+        steps: int = Field(4, ge=1)
+
+    def __init__(self, *args: Any, settings: {cls}.Settings, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
-        if isinstance(step_time, bool) or not isinstance(step_time, int | float) or step_time <= 0:
-            raise ValueError(f"step_time must be a number > 0, got {{step_time!r}}")
-        if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
-            raise ValueError(f"steps must be an integer >= 1, got {{steps!r}}")
-        self.step_time = float(step_time)
-        self.steps = steps
+        self.step_time = settings.step_time
+        self.steps = settings.steps
 
     async def execute(self, goal: ActionGoal) -> str | None:
         if "broken" in goal.arguments:
@@ -93,7 +97,7 @@ class Test{cls}Contract(PerformerContract):
     entry = {{"kind": "{name}", "name": "{name}_1", "actions": {{"work": ["robot1"]}}}}
     goal = ("work", ("robot1", "table"))
     failing_goal = ("work", ("robot1", "broken"))
-    bad_settings = [({{"step_time": -1}}, ""), ({{"colour": "red"}}, "colour")]
+    bad_settings = [({{"step_time": -1}}, "step_time"), ({{"colour": "red"}}, "colour")]
 '''
 
 DOMAIN = """\
@@ -131,8 +135,8 @@ plansys-bridge run mission.yaml
 ```
 
 Edit `{package}/performer.py`: replace the loop in `execute` with your hardware calls,
-declare your mission-file settings in `settings_keys` (they arrive as keyword
-arguments of `__init__`) and stop the hardware in `on_cancel`.
+declare your mission-file settings as fields of the `Settings` model (they arrive
+validated as `settings` in `__init__`) and stop the hardware in `on_cancel`.
 """
 
 

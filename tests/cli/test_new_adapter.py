@@ -6,6 +6,8 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import sysconfig
+import venv
 from pathlib import Path
 
 import pytest
@@ -13,21 +15,38 @@ import pytest
 from plansys_bridge.cli import main
 
 
+def _fresh_venv(where: Path) -> Path:
+    """A new virtual environment that sees this one's packages (plansys-bridge and its
+    dependencies, as a user's environment would have them) but none of its own."""
+    venv.create(where, with_pip=False)
+    python = where / "bin" / "python"
+    purelib = subprocess.run(
+        [str(python), "-c", "import sysconfig; print(sysconfig.get_path('purelib'))"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.strip()
+    ours = sysconfig.get_path("purelib")
+    # addsitedir also runs the .pth files there (the editable install's finder)
+    (Path(purelib) / "base_env.pth").write_text(f"import site; site.addsitedir({ours!r})\n")
+    return python
+
+
 def test_scaffold_installs_and_passes_its_contract(tmp_path: Path) -> None:
     package = tmp_path / "gripper"
     assert main(["new-adapter", "gripper", "--dir", str(package)]) == 0
-    site = tmp_path / "site"
+    python = _fresh_venv(tmp_path / "venv")
     install = subprocess.run(
-        [sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target", str(site), "."],
+        [sys.executable, "-m", "pip", "--python", str(python), "install", "-q", "--no-deps", "."],
         cwd=package,
         capture_output=True,
         text=True,
         timeout=300,
     )
     assert install.returncode == 0, install.stderr
-    env = {**os.environ, "PYTHONPATH": str(site)}
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     tests = subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests"],
+        [str(python), "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests"],
         cwd=package,
         env=env,
         capture_output=True,
@@ -37,7 +56,7 @@ def test_scaffold_installs_and_passes_its_contract(tmp_path: Path) -> None:
     assert tests.returncode == 0, tests.stdout + tests.stderr
     assert "7 passed" in tests.stdout
     mission = subprocess.run(
-        [sys.executable, "-m", "plansys_bridge", "run", "mission.yaml", "--json"],
+        [str(python), "-m", "plansys_bridge", "run", "mission.yaml", "--json"],
         cwd=package,
         env=env,
         capture_output=True,
