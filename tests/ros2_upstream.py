@@ -11,7 +11,9 @@ guid; int64_t seq;}``, rmw_cyclonedds_cpp/src/rmw_node.cpp), and travel on
 """
 
 import asyncio
+import types
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 from typing import Any
 
 from cyclonedds.core import Policy, Qos
@@ -138,6 +140,76 @@ class ActionExecutionInfo_(IdlStruct, typename="plansys2_msgs::msg::dds_::Action
     duration: Duration_ = field(default_factory=Duration_)
     completion: float32 = 0.0
     message_status: str = ""
+
+
+# std_msgs/msg/Header: "builtin_interfaces/Time stamp / string frame_id"
+@dataclass
+class Header_(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
+    stamp: Time_ = field(default_factory=Time_)
+    frame_id: str = ""
+
+
+# geometry_msgs/msg/Point, Quaternion, Pose, PoseStamped (ros2/common_interfaces)
+@dataclass
+class Point_(IdlStruct, typename="geometry_msgs::msg::dds_::Point_"):
+    x: float64 = 0.0
+    y: float64 = 0.0
+    z: float64 = 0.0
+
+
+@dataclass
+class Quaternion_(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
+    x: float64 = 0.0
+    y: float64 = 0.0
+    z: float64 = 0.0
+    w: float64 = 1.0
+
+
+@dataclass
+class Pose_(IdlStruct, typename="geometry_msgs::msg::dds_::Pose_"):
+    position: Point_ = field(default_factory=Point_)
+    orientation: Quaternion_ = field(default_factory=Quaternion_)
+
+
+@dataclass
+class PoseStamped_(IdlStruct, typename="geometry_msgs::msg::dds_::PoseStamped_"):
+    header: Header_ = field(default_factory=Header_)
+    pose: Pose_ = field(default_factory=Pose_)
+
+
+def _struct(name: str, typename: str, fields: list[tuple[str, Any, Any]]) -> type:
+    """``@dataclass class name(IdlStruct, typename=...)`` with ``fields`` (name, type,
+    default factory), as written by hand above."""
+
+    def body(ns: dict[str, Any]) -> None:
+        ns["__annotations__"] = {f: t for f, t, _ in fields}
+        ns.update({f: field(default_factory=make) for f, _, make in fields})
+
+    return dataclass(types.new_class(name, (IdlStruct,), {"typename": typename}, body))
+
+
+def action_types(package: str, action: str, goal: type, result: type, feedback: type) -> Any:
+    """rosidl's messages derived from an action (``<Action>_SendGoal_Request_`` =
+    request header + goal_id + goal, ...), as rmw_cyclonedds carries them."""
+    prefix = f"{package}::action::dds_::{action}_"
+    header: list[tuple[str, Any, Any]] = [("guid", uint64, int), ("seq", int64, int)]
+    made = {
+        "SendGoalRequest_": [*header, ("goal_id", UUID_, UUID_), ("goal", goal, goal)],
+        "SendGoalResponse_": [*header, ("accepted", bool, bool), ("stamp", Time_, Time_)],
+        "GetResultRequest_": [*header, ("goal_id", UUID_, UUID_)],
+        "GetResultResponse_": [*header, ("status", int8, int), ("result", result, result)],
+        "FeedbackMessage_": [("goal_id", UUID_, UUID_), ("feedback", feedback, feedback)],
+    }
+    names = {
+        "SendGoalRequest_": "SendGoal_Request_",
+        "SendGoalResponse_": "SendGoal_Response_",
+        "GetResultRequest_": "GetResult_Request_",
+        "GetResultResponse_": "GetResult_Response_",
+        "FeedbackMessage_": "FeedbackMessage_",
+    }
+    return SimpleNamespace(
+        **{k: _struct(k, prefix + names[k], fields) for k, fields in made.items()}
+    )
 
 
 def qos(depth: int = 10, latched: bool = False) -> Qos:

@@ -19,11 +19,12 @@ pytest.importorskip("cyclonedds")
 from cyclonedds.core import Policy, Qos
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import array, float64, int32, uint32
+from cyclonedds.idl.types import array, float64
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
+from ros2_upstream import Header_, Pose_
 
 from plansys_bridge.bridge.bridge import Bridge
 from plansys_bridge.bridge.config import parse_bridge_config
@@ -38,41 +39,6 @@ DOMAIN = 77
 @dataclass
 class String_(IdlStruct, typename="std_msgs::msg::dds_::String_"):
     data: str = ""
-
-
-# builtin_interfaces/msg/Time: "int32 sec / uint32 nanosec"
-@dataclass
-class Time_(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
-    sec: int32 = 0
-    nanosec: uint32 = 0
-
-
-# std_msgs/msg/Header: "builtin_interfaces/Time stamp / string frame_id"
-@dataclass
-class Header_(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
-    stamp: Time_ = field(default_factory=Time_)
-    frame_id: str = ""
-
-
-@dataclass
-class Point_(IdlStruct, typename="geometry_msgs::msg::dds_::Point_"):
-    x: float64 = 0.0
-    y: float64 = 0.0
-    z: float64 = 0.0
-
-
-@dataclass
-class Quaternion_(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
-    x: float64 = 0.0
-    y: float64 = 0.0
-    z: float64 = 0.0
-    w: float64 = 1.0
-
-
-@dataclass
-class Pose_(IdlStruct, typename="geometry_msgs::msg::dds_::Pose_"):
-    position: Point_ = field(default_factory=Point_)
-    orientation: Quaternion_ = field(default_factory=Quaternion_)
 
 
 # geometry_msgs/msg/PoseWithCovariance: "Pose pose / float64[36] covariance"

@@ -20,7 +20,7 @@ pytest.importorskip("cyclonedds", reason="cyclonedds (extra 'dds') is not instal
 
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import int8, int64, sequence, uint64
+from cyclonedds.idl.types import sequence
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from ros2_upstream import (
@@ -34,7 +34,7 @@ from ros2_upstream import (
     Plan_,
     PlanItem_,
     RawClient,
-    Time_,
+    action_types,
     qos,
 )
 
@@ -69,51 +69,12 @@ class Feedback_(IdlStruct, typename="plansys2_msgs::action::dds_::ExecutePlan_Fe
     action_execution_status: sequence[ActionExecutionInfo_] = field(default_factory=list)
 
 
-@dataclass
-class SendGoalRequest_(
-    IdlStruct, typename="plansys2_msgs::action::dds_::ExecutePlan_SendGoal_Request_"
-):
-    guid: uint64 = 0
-    seq: int64 = 0
-    goal_id: UUID_ = field(default_factory=UUID_)
-    goal: Goal_ = field(default_factory=Goal_)
-
-
-@dataclass
-class SendGoalResponse_(
-    IdlStruct, typename="plansys2_msgs::action::dds_::ExecutePlan_SendGoal_Response_"
-):
-    guid: uint64 = 0
-    seq: int64 = 0
-    accepted: bool = False
-    stamp: Time_ = field(default_factory=Time_)
-
-
-@dataclass
-class GetResultRequest_(
-    IdlStruct, typename="plansys2_msgs::action::dds_::ExecutePlan_GetResult_Request_"
-):
-    guid: uint64 = 0
-    seq: int64 = 0
-    goal_id: UUID_ = field(default_factory=UUID_)
-
-
-@dataclass
-class GetResultResponse_(
-    IdlStruct, typename="plansys2_msgs::action::dds_::ExecutePlan_GetResult_Response_"
-):
-    guid: uint64 = 0
-    seq: int64 = 0
-    status: int8 = 0
-    result: Result_ = field(default_factory=Result_)
-
-
-@dataclass
-class FeedbackMessage_(
-    IdlStruct, typename="plansys2_msgs::action::dds_::ExecutePlan_FeedbackMessage_"
-):
-    goal_id: UUID_ = field(default_factory=UUID_)
-    feedback: Feedback_ = field(default_factory=Feedback_)
+EXECUTE_PLAN = action_types("plansys2_msgs", "ExecutePlan", Goal_, Result_, Feedback_)
+SendGoalRequest_ = EXECUTE_PLAN.SendGoalRequest_
+SendGoalResponse_ = EXECUTE_PLAN.SendGoalResponse_
+GetResultRequest_ = EXECUTE_PLAN.GetResultRequest_
+GetResultResponse_ = EXECUTE_PLAN.GetResultResponse_
+FeedbackMessage_ = EXECUTE_PLAN.FeedbackMessage_
 
 
 SUCCEEDED_ACTION = 4  # ActionExecutionInfo.msg: int8 SUCCEEDED=4

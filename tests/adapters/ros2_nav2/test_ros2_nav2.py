@@ -24,7 +24,7 @@ pytest.importorskip("cyclonedds", reason="cyclonedds (extra 'dds') is not instal
 
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import float32, float64, int8, int16, int64, uint16, uint64
+from cyclonedds.idl.types import float32, int16, uint16
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
@@ -41,7 +41,9 @@ from ros2_upstream import (
     GoalInfo_,
     GoalStatus_,
     GoalStatusArray_,
+    PoseStamped_,
     Time_,
+    action_types,
     qos,
 )
 
@@ -59,39 +61,6 @@ DOMAIN = Path(__file__).resolve().parents[3] / "configs" / "pddl" / "flat_naviga
 
 
 # -- upstream types, typed from the .msg/.action/.srv texts -----------------------------
-@dataclass
-class Header_(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
-    stamp: Time_ = field(default_factory=Time_)
-    frame_id: str = ""
-
-
-@dataclass
-class Point_(IdlStruct, typename="geometry_msgs::msg::dds_::Point_"):
-    x: float64 = 0.0
-    y: float64 = 0.0
-    z: float64 = 0.0
-
-
-@dataclass
-class Quaternion_(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
-    x: float64 = 0.0
-    y: float64 = 0.0
-    z: float64 = 0.0
-    w: float64 = 1.0
-
-
-@dataclass
-class Pose_(IdlStruct, typename="geometry_msgs::msg::dds_::Pose_"):
-    position: Point_ = field(default_factory=Point_)
-    orientation: Quaternion_ = field(default_factory=Quaternion_)
-
-
-@dataclass
-class PoseStamped_(IdlStruct, typename="geometry_msgs::msg::dds_::PoseStamped_"):
-    header: Header_ = field(default_factory=Header_)
-    pose: Pose_ = field(default_factory=Pose_)
-
-
 @dataclass
 class Goal_(IdlStruct, typename="nav2_msgs::action::dds_::NavigateToPose_Goal_"):
     pose: PoseStamped_ = field(default_factory=PoseStamped_)
@@ -113,51 +82,12 @@ class Feedback_(IdlStruct, typename="nav2_msgs::action::dds_::NavigateToPose_Fee
     distance_remaining: float32 = 0.0
 
 
-@dataclass
-class SendGoalRequest_(
-    IdlStruct, typename="nav2_msgs::action::dds_::NavigateToPose_SendGoal_Request_"
-):
-    guid: uint64 = 0
-    seq: int64 = 0
-    goal_id: UUID_ = field(default_factory=UUID_)
-    goal: Goal_ = field(default_factory=Goal_)
-
-
-@dataclass
-class SendGoalResponse_(
-    IdlStruct, typename="nav2_msgs::action::dds_::NavigateToPose_SendGoal_Response_"
-):
-    guid: uint64 = 0
-    seq: int64 = 0
-    accepted: bool = False
-    stamp: Time_ = field(default_factory=Time_)
-
-
-@dataclass
-class GetResultRequest_(
-    IdlStruct, typename="nav2_msgs::action::dds_::NavigateToPose_GetResult_Request_"
-):
-    guid: uint64 = 0
-    seq: int64 = 0
-    goal_id: UUID_ = field(default_factory=UUID_)
-
-
-@dataclass
-class GetResultResponse_(
-    IdlStruct, typename="nav2_msgs::action::dds_::NavigateToPose_GetResult_Response_"
-):
-    guid: uint64 = 0
-    seq: int64 = 0
-    status: int8 = 0
-    result: Result_ = field(default_factory=Result_)
-
-
-@dataclass
-class FeedbackMessage_(
-    IdlStruct, typename="nav2_msgs::action::dds_::NavigateToPose_FeedbackMessage_"
-):
-    goal_id: UUID_ = field(default_factory=UUID_)
-    feedback: Feedback_ = field(default_factory=Feedback_)
+NAV = action_types("nav2_msgs", "NavigateToPose", Goal_, Result_, Feedback_)
+SendGoalRequest_ = NAV.SendGoalRequest_
+SendGoalResponse_ = NAV.SendGoalResponse_
+GetResultRequest_ = NAV.GetResultRequest_
+GetResultResponse_ = NAV.GetResultResponse_
+FeedbackMessage_ = NAV.FeedbackMessage_
 
 
 class RawNavigateToPoseServer:
