@@ -342,3 +342,12 @@ def test_dds_kind_builds_its_cyclone_configuration(tmp_path: Path) -> None:
     with pytest.raises(ConfigError) as err:
         validate_settings(DdsKind.Settings, {"config": "c.xml", "peers": ["h"]}, key="transport")
     assert "replaces peers" in str(err.value)
+
+
+def test_converted_builtin_performers_declare_settings_models() -> None:
+    """The performers whose settings are pydantic models (the others still use the
+    older ``settings_keys`` shape, which keeps working)."""
+    from plansys_bridge.performers.entry import has_settings_model
+
+    for name in ("can", "mavlink", "ros1_move_base"):
+        assert has_settings_model(PERFORMERS.load(name)), name
