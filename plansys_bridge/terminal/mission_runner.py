@@ -19,7 +19,6 @@ import asyncio
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from plansys_bridge.errors import ConfigError
 from plansys_bridge.terminal.runner import Actor
 
 if TYPE_CHECKING:
@@ -53,11 +52,11 @@ class MissionRunner:
         live: bool = False,
         console: Any = None,
     ) -> None:
-        if not local_performers and mission.transport.kind != "dds":
-            raise ConfigError(
-                "performers in other processes need transport: {kind: dds}",
+        if not local_performers and not mission.transport_kind().distributed:
+            raise mission.error(
+                "performers in other processes need a transport between processes "
+                "(transport: {kind: dds})",
                 key="transport.kind",
-                file=mission.source,
             )
         self.mission = mission.model_copy(update={"events": []})
         self.knowledge = knowledge
