@@ -37,6 +37,7 @@ PERFORMERS: PluginRegistry[ActionPerformer] = PluginRegistry(
         "simulated": "plansys_bridge.performers.simulated:SimulatedPerformer",
         "bt": "plansys_bridge.performers.bt.performer:BTActionPerformer",
         "mavlink": "plansys_bridge_adapters.mavlink.performer:MavlinkPerformer",
+        "mavlink_replay": "plansys_bridge_adapters.mavlink.replay:MavlinkReplayPerformer",
         "can": "plansys_bridge_adapters.can.performer:CanBasePerformer",
         "rosbag": "plansys_bridge_adapters.rosbag.performer:BagNavigationPerformer",
         "ros2_nav2": "plansys_bridge_adapters.ros2_nav2.performer:Nav2Performer",
