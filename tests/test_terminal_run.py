@@ -275,7 +275,7 @@ def test_cli_no_performers_needs_a_dds_mission(tmp_path: Path) -> None:
 
     mission = tmp_path / "mission.yaml"
     mission.write_text(MISSION.format(domain=SIMPLE_DOMAIN, success=1.0))
-    with pytest.raises(ConfigError, match=r"transport.kind.*need transport: \{kind: dds\}"):
+    with pytest.raises(ConfigError, match=r"transport.kind.*need a transport between processes"):
         terminal_cmd.run(
             _cli_args("--mission", str(mission), "--no-performers"), io.StringIO(""), io.StringIO()
         )
