@@ -13,13 +13,11 @@ import logging
 import os
 import socketserver
 import threading
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable, Collection
+from typing import Any, Protocol
 from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
 
-if TYPE_CHECKING:
-    from plansys_bridge.ros1.node import Node
-
-__all__ = ["SlaveServer", "XmlRpcServer"]
+__all__ = ["SlaveNode", "SlaveServer", "XmlRpcServer"]
 
 log = logging.getLogger(__name__)
 
@@ -39,10 +37,43 @@ class _Quiet(SimpleXMLRPCRequestHandler):
         return None
 
 
+class SlaveNode(Protocol):
+    """What the slave API answers from: the node it serves.
+
+    Declared here, beside its user, so that the server never imports the node that
+    owns it; :class:`~plansys_bridge.ros1.node.Node` has all of it.
+    """
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def master_uri(self) -> str: ...
+
+    @property
+    def host(self) -> str: ...
+
+    @property
+    def tcp_port(self) -> int: ...
+
+    @property
+    def publishers(self) -> Collection[str]: ...
+
+    def call_soon(self, fn: Callable[..., None], *args: Any) -> None: ...
+
+    def publisher_update(self, topic: str, uris: list[str]) -> None: ...
+
+    def publications(self) -> list[list[str]]: ...
+
+    def subscriptions(self) -> list[list[str]]: ...
+
+    def bus_info(self) -> list[list[Any]]: ...
+
+
 class SlaveServer:
     """Serves the slave API of ``node`` on ``bind``:0 until :meth:`close`."""
 
-    def __init__(self, node: Node, bind: str) -> None:
+    def __init__(self, node: SlaveNode, bind: str) -> None:
         self.node = node
         self._server = XmlRpcServer((bind, 0))
         self.port: int = self._server.server_address[1]

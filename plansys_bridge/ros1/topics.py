@@ -17,21 +17,41 @@ import asyncio
 import contextlib
 import logging
 import socket
-from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable, Coroutine
+from typing import Any, Protocol
 
 from plansys_bridge.ros1.errors import MasterError, ProtocolError, Ros1Error
 from plansys_bridge.ros1.master import xmlrpc_call
 from plansys_bridge.ros1.tcpros import encode_header, frame, read_frame, read_header
+from plansys_bridge.ros1.types import Ros1Types
 
-if TYPE_CHECKING:
-    from plansys_bridge.ros1.node import Node
-
-__all__ = ["Connection", "Publisher", "Subscriber"]
+__all__ = ["Connection", "Publisher", "Subscriber", "TopicNode"]
 
 log = logging.getLogger(__name__)
 
 Callback = Callable[[Any], None]
+
+
+class TopicNode(Protocol):
+    """What a publisher or subscriber needs from the node that made it.
+
+    Declared here, beside its users, so that topics never import the node that owns
+    them; :class:`~plansys_bridge.ros1.node.Node` has all of it.
+    """
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def types(self) -> Ros1Types: ...
+
+    def types_ros1_name(self, type_name: str) -> str: ...
+
+    def spawn(self, coro: Coroutine[Any, Any, None], name: str) -> asyncio.Task[None]: ...
+
+    async def unadvertise(self, pub: Publisher) -> None: ...
+
+    async def unsubscribe(self, sub: Subscriber) -> None: ...
 
 
 class Connection:
@@ -59,7 +79,7 @@ class Publisher:
     """Publishes ``type_name`` messages on ``topic``; made by ``Node.advertise``."""
 
     def __init__(
-        self, node: Node, topic: str, type_name: str, *, latch: bool, queue_bytes: int
+        self, node: TopicNode, topic: str, type_name: str, *, latch: bool, queue_bytes: int
     ) -> None:
         self.node = node
         self.topic = topic
@@ -140,7 +160,7 @@ class Subscriber:
 
     def __init__(
         self,
-        node: Node,
+        node: TopicNode,
         topic: str,
         type_name: str,
         callback: Callback,
