@@ -5,12 +5,7 @@ from __future__ import annotations
 
 import argparse
 import io
-import os
-import random
 import re
-import selectors
-import subprocess
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -18,77 +13,31 @@ import pytest
 
 pytest.importorskip("cyclonedds", reason="cyclonedds (extra 'dds') is not installed")
 
+from dds_missions import performers_in_subprocess, random_domain_id, read_line, write_mission
+
 from plansys_bridge.cli import terminal_cmd
 
 pytestmark = pytest.mark.timeout(120)
 
-PDDL = Path(__file__).resolve().parents[1] / "configs" / "pddl" / "flat_navigation.pddl"
-
-MISSION = """\
-name: {name}
-domain: {domain}
-knowledge:
-  instances: {{r1: robot, r2: robot, hall: room, kitchen: room, bedroom: room}}
-  predicates:
-    - (robot_at r1 hall)
-    - (robot_at r2 hall)
-    - (connected hall kitchen)
-    - (connected hall bedroom)
-  functions:
-    - (= (travel_time hall kitchen) 1)
-    - (= (travel_time hall bedroom) 1)
-goal: (and (visited r1 kitchen) (visited r2 bedroom))
-performers:
-{performers}
-transport: {{kind: dds, domain_id: {domain_id}, peer_timeout: 20}}
-clock: {{kind: wall, time_scale: 0.2}}
-"""
-
-REMOTE = """\
-  - {kind: simulated, name: r1_base, actions: {move: [r1]}, default_duration: 1.0}
-  - {kind: simulated, name: r2_base, actions: {move: [r2]}, default_duration: 1.0}"""
-
 LOCAL = """\
   - {kind: simulated, name: r3_local, actions: {move: [r1]}, default_duration: 1.0}"""
+
+GOAL = "(and (visited r1 kitchen) (visited r2 bedroom))"
 
 
 @pytest.fixture
 def domain_id() -> int:
-    return random.SystemRandom().randint(1, 232)
-
-
-def _mission(tmp_path: Path, name: str, performers: str, domain_id: int) -> Path:
-    path = tmp_path / f"{name}.yaml"
-    path.write_text(
-        MISSION.format(name=name, domain=PDDL, performers=performers, domain_id=domain_id),
-        encoding="utf-8",
-    )
-    return path
+    return random_domain_id()
 
 
 @pytest.fixture
 def remote_performers(tmp_path: Path, domain_id: int) -> Iterator[Path]:
     """``plansys-bridge performers`` serving r1_base and r2_base in a subprocess."""
-    mission = _mission(tmp_path, "fleet", REMOTE, domain_id)
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "plansys_bridge", "performers", str(mission), "--duration", "90"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=os.environ | {"PYTHONUNBUFFERED": "1"},
-    )
-    try:
-        assert proc.stdout is not None
-        with selectors.DefaultSelector() as sel:
-            sel.register(proc.stdout, selectors.EVENT_READ)
-            if not sel.select(30):
-                pytest.fail("the performers process said nothing within 30 s")
-        ready = proc.stdout.readline()
+    mission = write_mission(tmp_path, name="fleet", goal=GOAL, domain_id=domain_id, peer_timeout=20)
+    with performers_in_subprocess(mission, duration=90) as proc:
+        ready = read_line(proc, timeout=30)
         assert ready.startswith("performers ready: r1_base, r2_base"), ready
         yield mission
-    finally:
-        proc.kill()
-        proc.communicate(timeout=10)
 
 
 def _args(*argv: str) -> argparse.Namespace:
@@ -105,7 +54,9 @@ def _actors(text: str) -> dict[str, str]:
 def test_check_actors_hears_performers_of_other_processes(
     tmp_path: Path, remote_performers: Path, domain_id: int
 ) -> None:
-    mine = _mission(tmp_path, "operator", LOCAL, domain_id)
+    mine = write_mission(
+        tmp_path, name="operator", performers=LOCAL, goal=GOAL, domain_id=domain_id, peer_timeout=20
+    )
     # each check listens two seconds on a fresh DDS participant; a loaded machine may
     # discover the other process later than that, so a few checks are allowed
     for _attempt in range(3):

@@ -3,19 +3,16 @@
 from __future__ import annotations
 
 import asyncio
-import contextlib
-import os
-import random
-import selectors
 import signal
 import subprocess
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 pytest.importorskip("cyclonedds", reason="cyclonedds (extra 'dds') is not installed")
+
+from dds_missions import performers_in_subprocess, read_line, write_mission
 
 from plansys_bridge.cli import main
 from plansys_bridge.errors import ConfigError, HubError
@@ -24,72 +21,6 @@ from plansys_bridge.mission import run_mission
 from plansys_bridge.mission_config import load_mission
 
 pytestmark = pytest.mark.timeout(90)
-
-PDDL = Path(__file__).resolve().parents[2] / "configs" / "pddl" / "flat_navigation.pddl"
-
-MISSION = """\
-name: dds_flat
-domain: {domain}
-knowledge:
-  instances: {{r1: robot, r2: robot, hall: room, kitchen: room, bedroom: room}}
-  predicates:
-    - (robot_at r1 hall)
-    - (robot_at r2 hall)
-    - (connected hall kitchen)
-    - (connected hall bedroom)
-    - (connected kitchen bedroom)
-  functions:
-    - (= (travel_time hall kitchen) 1)
-    - (= (travel_time hall bedroom) 1)
-    - (= (travel_time kitchen bedroom) 1)
-goal: (and (visited r1 kitchen) (visited r2 bedroom) (visited r1 bedroom))
-performers:
-  - {{kind: simulated, name: r1_base, actions: {{move: [r1]}}, default_duration: 1.0,
-     feedback_period: 0.5}}
-  - {{kind: simulated, name: r2_base, actions: {{move: [r2]}}, default_duration: 1.0,
-     feedback_period: 0.5}}
-transport: {{kind: dds, domain_id: {domain_id}, peer_timeout: {peer_timeout}}}
-clock: {{kind: wall, time_scale: 0.2}}
-timeout: 60
-"""
-
-
-def write_mission(tmp_path: Path, *, peer_timeout: float = 15.0) -> Path:
-    path = tmp_path / "mission.yaml"
-    domain_id = random.SystemRandom().randint(1, 232)
-    path.write_text(
-        MISSION.format(domain=PDDL, domain_id=domain_id, peer_timeout=peer_timeout),
-        encoding="utf-8",
-    )
-    return path
-
-
-def read_line(proc: subprocess.Popen[str], timeout: float) -> str:
-    """The next stdout line of ``proc``; fails the test instead of hanging."""
-    assert proc.stdout is not None
-    with selectors.DefaultSelector() as sel:
-        sel.register(proc.stdout, selectors.EVENT_READ)
-        if not sel.select(timeout):
-            pytest.fail(f"no output from the performers process within {timeout} s")
-    return proc.stdout.readline()
-
-
-@contextlib.contextmanager
-def performers_in_subprocess(mission: Path) -> Iterator[subprocess.Popen[str]]:
-    """``plansys-bridge performers MISSION`` in a subprocess, killed if still running."""
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "plansys_bridge", "performers", str(mission), "--duration", "80"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=os.environ | {"PYTHONUNBUFFERED": "1"},
-    )
-    try:
-        yield proc
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-        proc.communicate(timeout=10)
 
 
 @pytest.fixture

@@ -38,6 +38,14 @@ FACTORY_PLAN = """
 """
 
 
+DOOR_PASSES = """
+0.000: (hold_open holder d1) [10.000]
+0.001: (pass walker d1) [3.000]
+0.002: (pass walker2 d1) [3.000]
+"""
+"""One robot holds the door while two walkers pass it (door_setup's domain)."""
+
+
 def test_factory_robots_run_in_parallel_and_wait_only_for_what_they_need() -> None:
     domain = load_domain("factory.pddl")
     k = knowledge_from(domain, "problem_factory_1.pddl")
@@ -76,11 +84,7 @@ def test_actions_needing_only_an_at_start_effect_start_together_issue_211() -> N
 
 def test_two_independent_passes_do_not_wait_for_each_other() -> None:
     domain, k = door_setup()
-    plan = parse_plan(
-        "0.000: (hold_open holder d1) [10.000]\n"
-        "0.001: (pass walker d1) [3.000]\n"
-        "0.002: (pass walker2 d1) [3.000]\n"
-    )
+    plan = parse_plan(DOOR_PASSES)
     graph = build_plan_graph(plan, domain, k.state())
     graph.check()
     # both only need the door open; the shared (increase (total-cost) 1) commutes
@@ -293,11 +297,7 @@ def test_every_order_the_graph_allows_is_valid(seed: int) -> None:
     graph.check()
     assert _random_linearisation_is_valid(graph, domain, k.state(), rng) == []
     door, dk = door_setup()
-    door_plan = parse_plan(
-        "0.000: (hold_open holder d1) [10.000]\n"
-        "0.001: (pass walker d1) [3.000]\n"
-        "0.002: (pass walker2 d1) [3.000]\n"
-    )
+    door_plan = parse_plan(DOOR_PASSES)
     door_graph = build_plan_graph(door_plan, door, dk.state())
     assert _random_linearisation_is_valid(door_graph, door, dk.state(), rng) == []
 
