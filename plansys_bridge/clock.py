@@ -236,4 +236,21 @@ def run(coro: Coroutine[Any, Any, T], clock: Clock | None = None, *, debug: bool
     # A clock may say which loop it needs (``new_loop``); the default loop otherwise.
     factory = getattr(clock, "new_loop", None) or asyncio.new_event_loop
     with asyncio.Runner(debug=debug, loop_factory=factory) as runner:
-        return runner.run(coro)
+        return runner.run(_cancellation_kept(coro))
+
+
+async def _cancellation_kept(coro: Coroutine[Any, Any, T]) -> T:
+    """Run ``coro``; if the main task was cancelled and that got lost, cancel after all.
+
+    Ctrl-C (and SIGTERM, see :mod:`plansys_bridge.cli.signals`) cancels the main task,
+    and ``asyncio.Runner`` turns that into KeyboardInterrupt only if the task ends
+    cancelled. An orderly shutdown that awaits its own tasks under
+    ``suppress(CancelledError)``, or Python 3.11's ``wait_for`` finishing as the
+    cancel arrives, can swallow it, and the command would exit 0 as if nothing had
+    happened. A task still marked as cancelling at the end was interrupted.
+    """
+    result = await coro
+    task = asyncio.current_task()
+    if task is not None and task.cancelling():
+        raise asyncio.CancelledError
+    return result

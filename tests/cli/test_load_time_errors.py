@@ -55,7 +55,13 @@ def test_misspelt_url_scheme_is_found_at_load(
     path = copter(tmp_path, url="tpc:127.0.0.1:5760")
     assert main(["run", str(path)]) == 2
     line = error_line(capsys)
-    assert line.startswith(f"error: {path}:37:3: performers[0].url: tpc:127.0.0.1:5760: unknown")
+    [(row, text)] = [
+        (n, t) for n, t in enumerate(path.read_text().splitlines(), 1) if "url: tpc:" in t
+    ]
+    col = text.index("url") + 1
+    assert line.startswith(
+        f"error: {path}:{row}:{col}: performers[0].url: tpc:127.0.0.1:5760: unknown"
+    )
     assert "did you mean tcp:?" in line
 
 
