@@ -165,13 +165,34 @@ class BusSettings(PluginSettings):
         return value
 
 
+class LocationSpec(PluginSettings):
+    """``{x, y, yaw?, via?}`` or ``[x, y]`` / ``[x, y, yaw]``."""
+
+    x: float
+    y: float
+    yaw: float | None = None
+    via: list[Annotated[list[float], Field(min_length=2, max_length=2)]] = Field(
+        default_factory=list
+    )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _list_form(cls, value: object) -> object:
+        if isinstance(value, list | tuple):
+            if len(value) not in (2, 3):
+                raise ValueError(f"must be [x, y] or [x, y, yaw], got {list(value)!r}")
+            return dict(zip(("x", "y", "yaw"), value, strict=False))
+        return value
+
+
 class CanSettings(PluginSettings):
     """The kind-specific keys of a ``kind: can`` performer entry."""
 
     robot: Annotated[str, Field(min_length=1, pattern=r"\S")]
     """The PDDL object this base is."""
-    locations: Any = Field(...)
-    """A locations file (``locations:`` mapping) or the mapping itself."""
+    locations: Annotated[dict[str, LocationSpec], Field(min_length=1)] | str
+    """A locations file (``locations:`` mapping, read when the performer is built) or
+    the table itself, checked here so a bad entry is an error when the mission loads."""
     bus: BusSettings = Field(default_factory=BusSettings)
     dbc: str | None = None
     controller: ControllerSettings = Field(default_factory=ControllerSettings)  # type: ignore[valid-type]
@@ -185,6 +206,23 @@ class CanSettings(PluginSettings):
     replay: Any = None
     """A recorded log (``{log, rate, include_tx}`` or its path) played on the virtual
     bus in place of the base (:mod:`.replay`); checked with the log when built."""
+
+    @field_validator("locations", mode="before")
+    @classmethod
+    def _file_or_table(cls, value: object) -> object:
+        """One error for a value that is neither (pydantic would list both branches)."""
+        if isinstance(value, str) and not value.strip():
+            raise ValueError("must name a locations file or be a mapping of locations")
+        if isinstance(value, str):
+            return value
+        if not isinstance(value, Mapping):
+            raise ValueError(
+                f"must be a locations file or a mapping of name: [x, y, yaw?], got {value!r}"
+            )
+        for name in value:
+            if not isinstance(name, str) or not name.strip():
+                raise ValueError(f"location names must be non-empty strings, got {name!r}")
+        return value
 
     _battery = field_validator("battery", mode="before")(_true_is_empty)
     _simulate = field_validator("simulate_base", mode="before")(_true_is_empty)
@@ -221,26 +259,6 @@ class CanBaseSettings:
     record_period: float = 0.1
     replay: ReplaySettings | None = None
     """A recorded log played on the virtual bus in place of the base (:mod:`.replay`)."""
-
-
-class LocationSpec(PluginSettings):
-    """``{x, y, yaw?, via?}`` or ``[x, y]`` / ``[x, y, yaw]``."""
-
-    x: float
-    y: float
-    yaw: float | None = None
-    via: list[Annotated[list[float], Field(min_length=2, max_length=2)]] = Field(
-        default_factory=list
-    )
-
-    @model_validator(mode="before")
-    @classmethod
-    def _list_form(cls, value: object) -> object:
-        if isinstance(value, list | tuple):
-            if len(value) not in (2, 3):
-                raise ValueError(f"must be [x, y] or [x, y, yaw], got {list(value)!r}")
-            return dict(zip(("x", "y", "yaw"), value, strict=False))
-        return value
 
 
 class _LocationTable(PluginSettings):
