@@ -23,76 +23,92 @@ import logging
 import math
 import random
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Annotated, Any, TypedDict
+
+from pydantic import Field, field_validator
 
 from plansys_bridge.errors import ConfigError
-from plansys_bridge.hub.settings import is_number, settings_from_mapping
+from plansys_bridge.hub.settings import is_number
 from plansys_bridge.performers.base import (
     ActionFailed,
     ActionGoal,
     ActionPerformer,
     PerformerContext,
 )
+from plansys_bridge.performers.entry import PerformerConfig
+from plansys_bridge.plugins import PluginSettings, validate_settings
 
-__all__ = ["FaultPlan", "SimulatedPerformer"]
+if TYPE_CHECKING:
+    from typing_extensions import Unpack
+
+__all__ = ["FaultPlan", "SimulatedOptions", "SimulatedPerformer", "SimulatedSettings"]
 
 log = logging.getLogger(__name__)
 
 DurationHint = Callable[[ActionGoal], float | None]
 
 
-@dataclass(frozen=True)
-class FaultPlan:
-    """Seeded fault rates for a :class:`SimulatedPerformer` (all off by default)."""
+class FaultPlan(PluginSettings):
+    """Seeded fault rates for a :class:`SimulatedPerformer` (all off by default): the
+    entry's ``faults:`` keys, also built directly by the soak and experiment runs."""
 
-    die_rate: float = 0.0
+    die_rate: float = Field(0.0, ge=0.0, le=1.0)
     """Probability that a goal makes the performer die part-way through."""
-    lose_finish_rate: float = 0.0
+    lose_finish_rate: float = Field(0.0, ge=0.0, le=1.0)
     """Probability that a goal's FINISH is never sent."""
     never_answer: bool = False
     """Ignore every REQUEST (while still sending heartbeats)."""
-    revive_after: float | None = None
+    revive_after: float | None = Field(None, ge=0.0)
     """Mission seconds after dying before the performer is back (None: stays dead)."""
-    die_at: float = 0.5
+    die_at: float = Field(0.5, ge=0.0, lt=1.0)
     """Fraction of the action's duration at which a dying performer goes silent."""
-
-    def __post_init__(self) -> None:
-        for name in ("die_rate", "lose_finish_rate"):
-            value = getattr(self, name)
-            if not is_number(value) or not 0.0 <= value <= 1.0:
-                raise ConfigError(f"must be a probability in [0, 1], got {value!r}", key=name)
-        if not is_number(self.die_at) or not 0.0 <= self.die_at < 1.0:
-            raise ConfigError(f"must be a fraction in [0, 1), got {self.die_at!r}", key="die_at")
-        if self.revive_after is not None and (
-            not is_number(self.revive_after) or self.revive_after < 0
-        ):
-            raise ConfigError(
-                f"must be a number >= 0, got {self.revive_after!r}", key="revive_after"
-            )
-        if not isinstance(self.never_answer, bool):
-            raise ConfigError(
-                f"must be true or false, got {self.never_answer!r}", key="never_answer"
-            )
 
     @classmethod
     def from_config(cls, config: object, key: str) -> FaultPlan:
-        return settings_from_mapping(cls, config, key)
+        """The plan a ``faults:`` mapping describes (null: no faults); errors name the key."""
+        return validate_settings(cls, config, key=key)
+
+
+def _none_is_default(value: object) -> object:
+    """``faults: null`` in a mission file means no faults, as leaving the key out does."""
+    return {} if value is None else value
+
+
+class SimulatedSettings(PluginSettings):
+    """The kind-specific keys of a ``kind: simulated`` performer entry."""
+
+    durations: dict[str, Annotated[float, Field(ge=0.0)]] = Field(default_factory=dict)
+    """Seconds per action name or per full action text ``"(move r1 a b)"``."""
+    default_duration: float = Field(1.0, ge=0.0)
+    success_rate: float = Field(1.0, ge=0.0, le=1.0)
+    seed: int = 0
+    feedback_period: float | None = Field(1.0, gt=0.0)
+    """Mission seconds between two FEEDBACKs (null: none)."""
+    faults: FaultPlan = Field(default_factory=FaultPlan)
+
+    _faults = field_validator("faults", mode="before")(_none_is_default)
+
+
+class SimulatedOptions(TypedDict, total=False):
+    """The settings as keywords, for code that builds a performer without a mission file."""
+
+    durations: Mapping[str, float]
+    default_duration: float
+    success_rate: float
+    seed: int
+    feedback_period: float | None
+    faults: FaultPlan | Mapping[str, Any] | None
 
 
 class SimulatedPerformer(ActionPerformer):
-    """Sleeps for the action's duration on the mission clock, sending progress feedback."""
+    """Sleeps for the action's duration on the mission clock, sending progress feedback.
 
-    settings_keys: ClassVar[frozenset[str]] = frozenset(
-        {
-            "durations",
-            "default_duration",
-            "success_rate",
-            "seed",
-            "feedback_period",
-            "faults",
-        }
-    )
+    Built from a mission entry it gets its validated :class:`SimulatedSettings` as
+    ``settings=``; code building one directly may give the same values as keywords
+    (:class:`SimulatedOptions`), which go through the same model.
+    """
+
+    Settings = SimulatedSettings
 
     def __init__(
         self,
@@ -102,13 +118,9 @@ class SimulatedPerformer(ActionPerformer):
         *,
         heartbeat_period: float = 1.0,
         commit_timeout: float = 2.0,
-        durations: Mapping[str, float] | None = None,
-        default_duration: float = 1.0,
-        success_rate: float = 1.0,
-        seed: int = 0,
-        feedback_period: float | None = 1.0,
-        faults: FaultPlan | Mapping[str, Any] | None = None,
+        settings: SimulatedSettings | None = None,
         duration_hint: DurationHint | None = None,
+        **options: Unpack[SimulatedOptions],
     ) -> None:
         super().__init__(
             context,
@@ -117,27 +129,23 @@ class SimulatedPerformer(ActionPerformer):
             heartbeat_period=heartbeat_period,
             commit_timeout=commit_timeout,
         )
-        if not is_number(default_duration) or default_duration < 0:
-            raise ValueError(f"default_duration must be >= 0, got {default_duration!r}")
-        if not is_number(success_rate) or not 0.0 <= success_rate <= 1.0:
-            raise ValueError(f"success_rate must be in [0, 1], got {success_rate!r}")
-        if feedback_period is not None and (not is_number(feedback_period) or feedback_period <= 0):
-            raise ValueError(f"feedback_period must be > 0 or None, got {feedback_period!r}")
-        self.durations: dict[str, float] = {}
-        for name, seconds in (durations or {}).items():
-            if not is_number(seconds) or seconds < 0:
-                raise ValueError(f"duration of {name!r} must be a number >= 0, got {seconds!r}")
-            self.durations[name.strip().lower()] = float(seconds)
-        self.default_duration = float(default_duration)
-        self.success_rate = float(success_rate)
-        self.feedback_period = None if feedback_period is None else float(feedback_period)
-        self.faults = (
-            faults if isinstance(faults, FaultPlan) else FaultPlan.from_config(faults, "faults")
-        )
+        if settings is None:
+            settings = _settings_of(options)
+        elif options:
+            raise TypeError(f"give settings= or keywords ({', '.join(options)}), not both")
+        self.settings = settings
+        self.durations: dict[str, float] = {
+            name.strip().lower(): float(seconds) for name, seconds in settings.durations.items()
+        }
+        self.default_duration = float(settings.default_duration)
+        self.success_rate = float(settings.success_rate)
+        period = settings.feedback_period
+        self.feedback_period = None if period is None else float(period)
+        self.faults = settings.faults
         self.duration_hint = duration_hint
-        self.seed = seed
-        self._rng = random.Random(f"{seed}:{node_name}:outcome")
-        self._fault_rng = random.Random(f"{seed}:{node_name}:faults")
+        self.seed = settings.seed
+        self._rng = random.Random(f"{self.seed}:{node_name}:outcome")
+        self._fault_rng = random.Random(f"{self.seed}:{node_name}:faults")
         self.dead = False
         self.unresponsive = self.faults.never_answer
         self._die_next = False
@@ -145,6 +153,21 @@ class SimulatedPerformer(ActionPerformer):
         self._drop_finish = False
         self._revive_timer: asyncio.TimerHandle | None = None
         self.stats: dict[str, int] = {"succeeded": 0, "failed": 0, "died": 0, "lost_finish": 0}
+
+    @classmethod
+    def parse_config(cls, config: Mapping[str, Any], *, key: str = "performer") -> PerformerConfig:
+        """The settings model, then what it cannot see: each ``durations`` key names one
+        of the entry's actions (a misspelt one would silently never apply)."""
+        entry = super().parse_config(config, key=key)
+        for name in entry.settings.durations:
+            # an action name, or a full action text "(move r1 a b)"
+            action = name.strip().lstrip("(").split(maxsplit=1)[:1]
+            if not action or action[0].lower() not in entry.actions:
+                raise ConfigError(
+                    f"not one of this performer's actions ({', '.join(entry.actions)})",
+                    key=f"{key}.durations.{name}",
+                )
+        return entry
 
     # ------------------------------------------------------------------ durations
 
@@ -273,59 +296,11 @@ class SimulatedPerformer(ActionPerformer):
             self._revive_timer = None
         await super().stop()
 
-    @classmethod
-    def from_config(
-        cls, config: Mapping[str, Any], context: PerformerContext, *, key: str = "performer"
-    ) -> list[ActionPerformer]:
-        parsed = cls.parse_config(config, key=key)
-        s = parsed.settings
-        durations = s.get("durations", {})
-        if not isinstance(durations, Mapping):
-            raise ConfigError(
-                "must map action names (or action texts) to seconds", key=f"{key}.durations"
-            )
-        for name, seconds in durations.items():
-            if not isinstance(name, str) or not is_number(seconds) or seconds < 0:
-                raise ConfigError(
-                    f"must be a number of seconds >= 0, got {seconds!r}",
-                    key=f"{key}.durations.{name}",
-                )
-            # an action name, or a full action text "(move r1 a b)"
-            action = name.strip().lstrip("(").split(maxsplit=1)[:1]
-            if not action or action[0].lower() not in parsed.actions:
-                raise ConfigError(
-                    f"not one of this performer's actions ({', '.join(parsed.actions)})",
-                    key=f"{key}.durations.{name}",
-                )
-        for name, low, high in (("default_duration", 0.0, math.inf), ("success_rate", 0.0, 1.0)):
-            if name in s and (not is_number(s[name]) or not low <= s[name] <= high):
-                raise ConfigError(
-                    f"must be a number in [{low:g}, {high:g}], got {s[name]!r}", key=f"{key}.{name}"
-                )
-        if (
-            "feedback_period" in s
-            and s["feedback_period"] is not None
-            and (not is_number(s["feedback_period"]) or s["feedback_period"] <= 0)
-        ):
-            raise ConfigError(
-                f"must be a number > 0 (or null for no feedback), got {s['feedback_period']!r}",
-                key=f"{key}.feedback_period",
-            )
-        if "seed" in s and (isinstance(s["seed"], bool) or not isinstance(s["seed"], int)):
-            raise ConfigError(f"must be an integer, got {s['seed']!r}", key=f"{key}.seed")
-        faults = FaultPlan.from_config(s.get("faults"), f"{key}.faults")
-        return [
-            cls(
-                context,
-                parsed.name,
-                parsed.actions,
-                heartbeat_period=parsed.heartbeat_period,
-                commit_timeout=parsed.commit_timeout,
-                durations=durations,
-                default_duration=s.get("default_duration", 1.0),
-                success_rate=s.get("success_rate", 1.0),
-                seed=s.get("seed", 0),
-                feedback_period=s.get("feedback_period", 1.0),
-                faults=faults,
-            )
-        ]
+
+def _settings_of(options: SimulatedOptions) -> SimulatedSettings:
+    """Keyword settings through the model (plain mappings are fine here)."""
+    data: dict[str, Any] = dict(options)
+    for name in ("durations", "faults"):
+        if isinstance(data.get(name), Mapping):
+            data[name] = dict(data[name])
+    return validate_settings(SimulatedSettings, data)

@@ -14,7 +14,7 @@ from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.messages import ActionPerformerStatus, ExecutionType, Topics
 from plansys_bridge.hub.transport import InProcessTransport
 from plansys_bridge.performers.base import ActionGoal, PerformerContext
-from plansys_bridge.performers.simulated import FaultPlan, SimulatedPerformer
+from plansys_bridge.performers.simulated import FaultPlan, SimulatedPerformer, SimulatedSettings
 
 
 def _sim(hub: Hub, name: str = "sim", **kw: Any) -> SimulatedPerformer:
@@ -208,3 +208,35 @@ def test_from_config_errors(virtual_hub: Hub, settings: dict[str, Any], key: str
     with pytest.raises(ConfigError) as err:
         SimulatedPerformer.from_config(entry, ctx, key="p")
     assert err.value.key == key
+
+
+def test_settings_are_the_declared_model_checked_at_parse() -> None:
+    """The entry is checked without building anything (what the mission loader does),
+    durations keys included: a misspelt action would never apply."""
+    assert SimulatedPerformer.Settings is SimulatedSettings
+    entry = {"kind": "simulated", "name": "x", "actions": {"move": []}}
+    parsed = SimulatedPerformer.parse_config({**entry, "faults": None}, key="p")
+    assert parsed.settings == SimulatedSettings()
+    with pytest.raises(ConfigError) as err:
+        SimulatedPerformer.parse_config({**entry, "durations": {"mvoe": 2}}, key="p")
+    assert err.value.key == "p.durations.mvoe"
+    assert "not one of this performer's actions (move)" in str(err.value)
+    ok = SimulatedPerformer.parse_config({**entry, "durations": {"(Move r1 a b)": 2}}, key="p")
+    assert ok.settings.durations == {"(Move r1 a b)": 2}
+
+
+def test_keywords_go_through_the_same_model(virtual_hub: Hub) -> None:
+    with pytest.raises(ConfigError) as err:
+        _sim(virtual_hub, success_rate=1.5)
+    assert err.value.key == "success_rate"
+    with pytest.raises(ConfigError) as err:
+        _sim(virtual_hub, faults={"die_at": 1.0})
+    assert err.value.key == "faults.die_at"
+    perf = _sim(virtual_hub, durations={" Move ": 2}, faults=FaultPlan(never_answer=True))
+    assert perf.durations == {"move": 2.0}
+    assert perf.unresponsive
+
+
+def test_settings_and_keywords_together_are_refused(virtual_hub: Hub) -> None:
+    with pytest.raises(TypeError, match="not both"):
+        _sim(virtual_hub, settings=SimulatedSettings(), seed=3)
