@@ -179,3 +179,30 @@ def test_bad_tree_in_a_mission_names_key_and_line(tmp_path: Path) -> None:
         run_mission(load_mission(path), out=None)
     text = str(error.value)
     assert "performers[0].trees.move" in text and f"{bad}:2:1: <Moove>: unknown node type" in text
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "key", "message"),
+    [
+        ("tick_period: 0.5", "tick_period: -1", "tick_period", "greater than 0"),
+        ("plugins: [bt_example_nodes]", "plugins: bt_example_nodes", "plugins", "valid list"),
+        (f"transport: {DATA}/bt/transport.xml", "fly: x.xml", "trees.fly", "not one of"),
+        (f", transport: {DATA}/bt/transport.xml", "", "trees", "no tree file for transport"),
+    ],
+)
+def test_bad_settings_are_load_errors_with_line(
+    tmp_path: Path, old: str, new: str, key: str, message: str
+) -> None:
+    """The settings model and the trees-per-action check run when the mission loads,
+    before any tree file is read."""
+    path = _mission(tmp_path)
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new))
+    with pytest.raises(ConfigError) as error:
+        load_mission(path)
+    assert error.value.key == f"performers[0].{key}", str(error.value)
+    assert error.value.file == str(path) and error.value.line is not None
+    line = path.read_text().splitlines()[error.value.line - 1]
+    assert line.strip().startswith(key.split(".")[0]), line
+    assert message in str(error.value)

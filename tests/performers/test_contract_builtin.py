@@ -11,6 +11,7 @@ from plansys_bridge.testing import PerformerContract
 
 BAGS = Path(__file__).resolve().parents[2] / "bags"
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+BT_TREES = Path(__file__).resolve().parents[1] / "data" / "bt"
 
 
 class TestSimulatedContract(PerformerContract):
@@ -99,3 +100,33 @@ class TestMavlinkContract(PerformerContract):
 
     def make_context(self, hub: Hub) -> PerformerContext:
         return PerformerContext(hub=hub, clock=hub.clock, base_dir=CONFIGS)
+
+
+class TestBtContract(PerformerContract):
+    """The behaviour-tree performer running PlanSys2's example transport tree (grippers,
+    approach, move) with the example node plugins."""
+
+    entry = {
+        "kind": "bt",
+        "name": "r2d2_bt",
+        "actions": {"transport": ["r2d2"]},
+        "trees": {"transport": "transport.xml"},
+        "plugins": ["bt_example_nodes"],
+        "tick_period": 0.5,
+    }
+    goal = ("transport", ("r2d2", "wheel_1", "wheels_zone", "assembly_zone"))
+    failing_goal = ("transport", ("r2d2", "wheel_1", "wheels_zone", "nowhere"))
+    bad_settings = [
+        ({"tick_period": 0}, "tick_period"),
+        ({"tick_period": "fast"}, "tick_period"),
+        ({"trees": {"transport": 5}}, "trees.transport"),
+        ({"trees": {"transport": "transport.xml", "fly": "fly.xml"}}, "trees.fly"),
+        ({"trees": {"transport": "no_such_tree.xml"}}, "trees.transport"),
+        ({"trees": None}, "trees"),
+        ({"plugins": ["no_such_bt_plugin_module"]}, "plugins[0]"),
+        ({"plugins": "bt_example_nodes"}, "plugins"),
+        ({"colour": "red"}, "colour"),
+    ]
+
+    def make_context(self, hub: Hub) -> PerformerContext:
+        return PerformerContext(hub=hub, clock=hub.clock, base_dir=BT_TREES)

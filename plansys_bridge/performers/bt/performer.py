@@ -14,18 +14,24 @@ blackboard as ``arg0``, ``arg1``... (PlanSys2's convention, so ``goal="{arg2}"``
 reads the same), ticked every ``tick_period`` on the mission clock: SUCCESS
 finishes the action, FAILURE fails it naming the node that failed, RUNNING sends
 FEEDBACK with the share of leaves done. A CANCEL halts the tree (each running node's
-``halt()``). Tree files and node types are checked when the mission loads.
+``halt()``).
+
+The keys are the :class:`BtSettings` model, checked when the mission loads (with
+which action has which tree); the tree files are read, and each tree built once with
+its node types, when the performer is built, before anything starts.
 """
 
 from __future__ import annotations
 
 import asyncio
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any
 
 import py_trees
 from py_trees.common import Status
+from pydantic import Field
 
 from plansys_bridge.clock import VirtualClock
 from plansys_bridge.errors import ConfigError, PlansysBridgeError
@@ -38,14 +44,38 @@ from plansys_bridge.performers.base import (
 from plansys_bridge.performers.bt.build import build_tree
 from plansys_bridge.performers.bt.nodes import BtContext, BtNode, node_types
 from plansys_bridge.performers.bt.xml_tree import BtXmlError, Element, main_tree, read_bt_file
+from plansys_bridge.performers.entry import PerformerConfig
+from plansys_bridge.plugins import PluginSettings
 
-__all__ = ["BTActionPerformer"]
+__all__ = ["BTActionPerformer", "BtSettings", "BtTrees"]
+
+
+class BtSettings(PluginSettings):
+    """The kind-specific keys of a ``kind: bt`` performer entry."""
+
+    trees: dict[str, str] = Field(min_length=1)
+    """Each action's tree file, relative to the mission file."""
+    plugins: list[str] = Field(default_factory=list)
+    """Modules with a ``BT_NODES`` mapping of tag -> node class."""
+    tick_period: float = Field(0.1, gt=0.0)
+    """Mission seconds between two ticks."""
+
+
+@dataclass(frozen=True)
+class BtTrees:
+    """What the performer runs with: :class:`BtSettings` with the files read."""
+
+    trees: dict[str, Element]
+    """Action name -> the root element of its main tree."""
+    types: dict[str, type[BtNode]]
+    """Every node type by XML tag (built-ins, entry points, ``plugins``)."""
+    tick_period: float = 0.1
 
 
 class BTActionPerformer(ActionPerformer):
     """Runs each action as the behaviour tree its file describes (see module docs)."""
 
-    settings_keys: ClassVar[frozenset[str]] = frozenset({"trees", "plugins", "tick_period"})
+    Settings = BtSettings
 
     def __init__(
         self,
@@ -53,9 +83,7 @@ class BTActionPerformer(ActionPerformer):
         node_name: str,
         actions: Mapping[str, Sequence[str]],
         *,
-        trees: Mapping[str, Element],
-        types: Mapping[str, type[BtNode]],
-        tick_period: float = 0.1,
+        settings: BtTrees,
         heartbeat_period: float = 1.0,
         commit_timeout: float = 2.0,
     ) -> None:
@@ -66,9 +94,12 @@ class BTActionPerformer(ActionPerformer):
             heartbeat_period=heartbeat_period,
             commit_timeout=commit_timeout,
         )
-        self.trees = dict(trees)
-        self.types = dict(types)
-        self.tick_period = tick_period
+        missing = sorted(set(self.actions) - set(settings.trees))
+        if missing:
+            raise ValueError(f"no tree for {', '.join(missing)}")
+        self.trees = dict(settings.trees)
+        self.types = dict(settings.types)
+        self.tick_period = settings.tick_period
 
     def tree_for(self, goal: ActionGoal) -> py_trees.behaviour.Behaviour:
         """A fresh tree for ``goal`` (its arguments on the blackboard)."""
@@ -98,57 +129,39 @@ class BTActionPerformer(ActionPerformer):
             raise
 
     @classmethod
-    def from_config(
-        cls, config: Mapping[str, Any], context: PerformerContext, *, key: str = "performer"
-    ) -> list[ActionPerformer]:
-        parsed = cls.parse_config(config, key=key)
-        s = parsed.settings
-        plugins = s.get("plugins", [])
-        if not isinstance(plugins, list) or not all(isinstance(p, str) for p in plugins):
-            raise ConfigError("must be a list of module names", key=f"{key}.plugins")
-        types = node_types(plugins, key=f"{key}.plugins")
-        period = s.get("tick_period", 0.1)
-        if isinstance(period, bool) or not isinstance(period, int | float) or not period > 0:
-            raise ConfigError(f"must be a number > 0, got {period!r}", key=f"{key}.tick_period")
-        files = s.get("trees")
-        if not isinstance(files, Mapping) or not files:
-            raise ConfigError(
-                "must map each action to its tree file, e.g. {move: bt/move.xml}",
-                key=f"{key}.trees",
-            )
-        trees: dict[str, Element] = {}
-        for action, file in files.items():
-            where = f"{key}.trees.{action}"
-            name = str(action).strip().lower()
-            if name not in parsed.actions:
+    def parse_config(cls, config: Mapping[str, Any], *, key: str = "performer") -> PerformerConfig:
+        """The settings model, then what it cannot see: ``trees`` has one file for each
+        action of the entry and none for another."""
+        entry = super().parse_config(config, key=key)
+        named = {action.strip().lower(): action for action in entry.settings.trees}
+        for name, action in named.items():
+            if name not in entry.actions:
                 raise ConfigError(
-                    f"not one of this performer's actions ({', '.join(parsed.actions)})", key=where
+                    f"not one of this performer's actions ({', '.join(entry.actions)})",
+                    key=f"{key}.trees.{action}",
                 )
-            if not isinstance(file, str):
-                raise ConfigError(f"must be a file path, got {file!r}", key=where)
-            path = Path(file) if Path(file).is_absolute() else context.base_dir / file
-            try:
-                trees[name] = main_tree(read_bt_file(path))
-                # built once now: a wrong node or port is an error at load, not mid-mission
-                probe = BtContext(VirtualClock(), context.knowledge, _probe())
-                build_tree(trees[name], types, probe)
-            except BtXmlError as exc:
-                raise ConfigError(str(exc), key=where) from exc
-        missing = sorted(set(parsed.actions) - set(trees))
+        missing = sorted(set(entry.actions) - set(named))
         if missing:
             raise ConfigError(f"no tree file for {', '.join(missing)}", key=f"{key}.trees")
-        return [
-            cls(
-                context,
-                parsed.name,
-                parsed.actions,
-                trees=trees,
-                types=types,
-                tick_period=float(period),
-                heartbeat_period=parsed.heartbeat_period,
-                commit_timeout=parsed.commit_timeout,
-            )
-        ]
+        return entry
+
+    @classmethod
+    def prepare(cls, entry: PerformerConfig, context: PerformerContext) -> PerformerConfig:
+        """Read each tree file and build the tree once: a wrong node type or port is
+        an error naming the key and the file's line now, not mid-mission."""
+        settings: BtSettings = entry.settings
+        types = node_types(settings.plugins, key=f"{entry.key}.plugins")
+        trees: dict[str, Element] = {}
+        for action, file in settings.trees.items():
+            path = Path(file) if Path(file).is_absolute() else context.base_dir / file
+            try:
+                tree = main_tree(read_bt_file(path))
+                probe = BtContext(VirtualClock(), context.knowledge, _probe())
+                build_tree(tree, types, probe)
+            except BtXmlError as exc:
+                raise ConfigError(str(exc), key=f"{entry.key}.trees.{action}") from exc
+            trees[action.strip().lower()] = tree
+        return replace(entry, settings=BtTrees(trees, types, settings.tick_period))
 
 
 def _probe() -> dict[str, str]:
