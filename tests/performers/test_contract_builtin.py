@@ -64,7 +64,15 @@ class TestRosbagContract(PerformerContract):
     }
     goal = ("move", ("tiago", "kitchen", "livingroom"))
     failing_goal = ("move", ("tiago", "kitchen", "attic"))
-    bad_settings = [({"topic": 5}, "topic"), ({"colour": "red"}, "colour")]
+    bad_settings = [
+        ({"topic": 5}, "topic"),
+        ({"colour": "red"}, "colour"),
+        ({"rate": 0}, "rate"),
+        ({"segments": []}, "segments"),
+        ({"segments": "no_such.segments.yaml"}, "segments"),
+        ({"knowledge": {"functions": {"heading": "h"}}}, "knowledge.functions"),
+        ({"knowledge": {"functions": {"x": "rx"}, "period": 0}}, "knowledge.period"),
+    ]
 
     def make_context(self, hub: Hub) -> PerformerContext:
         return PerformerContext(hub=hub, clock=hub.clock, base_dir=BAGS)

@@ -17,8 +17,10 @@ While it runs, the performer:
   ``publish_topic`` is set, for whatever else follows the robot (a monitor, a
   second robot's planner).
 
-It finishes when the segment ends. A configuration that points at a missing bag,
-topic or an empty window fails at start-up (``setup``), not in the middle of a run.
+It finishes when the segment ends. The entry's keys are the :class:`RosbagSettings`
+model, checked when the mission loads; the segments (a file or the list) are read
+when the performer is built, and a missing bag, topic or an empty window fails at
+start-up (``setup``), not in the middle of a run.
 
 Mission file entry::
 
@@ -39,10 +41,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any, ClassVar
+from dataclasses import dataclass, replace
+from typing import Annotated, Any
 
-from plansys_bridge.errors import ConfigError, KnowledgeError
+from pydantic import Field, field_validator
+
+from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.pddl.model import FluentRef, FluentValue
 from plansys_bridge.performers.base import (
     ActionFailed,
@@ -50,8 +54,9 @@ from plansys_bridge.performers.base import (
     ActionPerformer,
     PerformerContext,
 )
+from plansys_bridge.performers.entry import PerformerConfig
+from plansys_bridge.plugins import PluginSettings
 
-from ..checks import mapping
 from .errors import BagError
 from .reader import BagReader, PoseSample
 from .route import PathProgress, Route, RouteError, Segment, SegmentProfile
@@ -59,68 +64,73 @@ from .route import PathProgress, Route, RouteError, Segment, SegmentProfile
 POSE_FIELDS = ("x", "y", "z", "yaw")
 
 
-@dataclass(frozen=True)
-class KnowledgeBinding:
-    """Which action argument names the robot, and which functions get its pose."""
+class KnowledgeBinding(PluginSettings):
+    """``knowledge:``: which action argument names the robot, and which functions get
+    its pose."""
 
-    robot_argument: int
-    functions: Mapping[str, str]
+    robot_argument: int = Field(0, ge=0)
+    functions: dict[str, Annotated[str, Field(min_length=1)]] = Field(min_length=1)
     """Pose field (``x``, ``y``, ``z``, ``yaw``) -> PDDL function name of one argument."""
-    period: float = 1.0
+    period: float = Field(1.0, gt=0.0)
     """Mission seconds between two knowledge updates (the last pose is always written)."""
 
+    @field_validator("functions")
     @classmethod
-    def from_config(cls, value: Any, key: str) -> KnowledgeBinding | None:
-        if value is None:
-            return None
-        value = mapping(
-            value,
-            key,
-            ("robot_argument", "functions", "period"),
-            "expected {robot_argument, functions, period}",
-        )
-        robot = value.get("robot_argument", 0)
-        if isinstance(robot, bool) or not isinstance(robot, int) or robot < 0:
-            raise ConfigError("expected an argument index >= 0", key=f"{key}.robot_argument")
-        functions = value.get("functions")
-        if not isinstance(functions, Mapping) or not functions:
-            raise ConfigError(
-                "expected a mapping of pose fields to PDDL functions, e.g. {x: robot_x}",
-                key=f"{key}.functions",
-            )
-        for field_name, fn in functions.items():
-            if field_name not in POSE_FIELDS:
-                raise ConfigError(
-                    f"unknown pose field {field_name!r} (known: {', '.join(POSE_FIELDS)})",
-                    key=f"{key}.functions",
-                )
-            if not isinstance(fn, str) or not fn:
-                raise ConfigError("expected a function name", key=f"{key}.functions.{field_name}")
-        period = value.get("period", 1.0)
-        if isinstance(period, bool) or not isinstance(period, int | float) or period <= 0:
-            raise ConfigError("expected seconds > 0", key=f"{key}.period")
-        return cls(
-            robot,
-            {str(k): str(v).lower() for k, v in functions.items()},
-            float(period),
-        )
+    def _pose_fields(cls, value: dict[str, str]) -> dict[str, str]:
+        for name in value:
+            if name not in POSE_FIELDS:
+                raise ValueError(f"unknown pose field {name!r} (known: {', '.join(POSE_FIELDS)})")
+        return {name: function.lower() for name, function in value.items()}
+
+
+class RosbagSettings(PluginSettings):
+    """The kind-specific keys of a ``kind: rosbag`` performer entry."""
+
+    segments: list[Any] | str
+    """The bag stretches serving the moves: a YAML file of them, or the list
+    (checked by :meth:`Route.from_config` when the performer is built)."""
+    bag: str | None = None
+    """Default bag of the segments, relative to the mission file."""
+    topic: str | None = None
+    """Default pose topic of the segments."""
+    rate: float = Field(1.0, gt=0.0)
+    publish_rate: float = Field(10.0, gt=0.0)
+    """Feedback, knowledge and recorder updates per second."""
+    record_topic: str | None = None
+    publish_topic: str | None = None
+    knowledge: KnowledgeBinding | None = None
+
+    @field_validator("segments", mode="before")
+    @classmethod
+    def _file_or_list(cls, value: object) -> object:
+        """One error for a value that is neither (pydantic would list both branches)."""
+        if isinstance(value, str) and value.strip():
+            return value
+        if isinstance(value, list) and value:
+            return value
+        raise ValueError(f"must be a segments file or a non-empty list of segments, got {value!r}")
+
+
+@dataclass(frozen=True)
+class BagReplay:
+    """What the performer runs with: :class:`RosbagSettings` with the segments read."""
+
+    route: Route
+    rate: float = 1.0
+    publish_rate: float = 10.0
+    record_topic: str | None = None
+    publish_topic: str | None = None
+    knowledge: KnowledgeBinding | None = None
 
 
 class BagNavigationPerformer(ActionPerformer):
-    """Executes moves by replaying recorded poses from ROS 1 / ROS 2 bags."""
+    """Executes moves by replaying recorded poses from ROS 1 / ROS 2 bags.
 
-    settings_keys: ClassVar[frozenset[str]] = frozenset(
-        {
-            "segments",
-            "bag",
-            "topic",
-            "rate",
-            "publish_rate",
-            "record_topic",
-            "publish_topic",
-            "knowledge",
-        }
-    )
+    Built from a mission entry it gets :class:`BagReplay` as ``settings=``; code
+    that has a :class:`Route` may pass ``route=`` alone for the default settings.
+    """
+
+    Settings = RosbagSettings
 
     def __init__(
         self,
@@ -128,12 +138,8 @@ class BagNavigationPerformer(ActionPerformer):
         node_name: str,
         actions: Mapping[str, Sequence[str]],
         *,
-        route: Route,
-        rate: float = 1.0,
-        publish_rate: float = 10.0,
-        record_topic: str | None = None,
-        publish_topic: str | None = None,
-        knowledge: KnowledgeBinding | None = None,
+        settings: BagReplay | None = None,
+        route: Route | None = None,
         heartbeat_period: float = 1.0,
         commit_timeout: float = 2.0,
     ) -> None:
@@ -144,16 +150,19 @@ class BagNavigationPerformer(ActionPerformer):
             heartbeat_period=heartbeat_period,
             commit_timeout=commit_timeout,
         )
-        if not rate > 0:
-            raise ValueError(f"rate must be > 0, got {rate!r}")
-        if not publish_rate > 0:
-            raise ValueError(f"publish_rate must be > 0, got {publish_rate!r}")
-        self.route = route
-        self.rate = float(rate)
-        self.publish_period = 1.0 / float(publish_rate)
-        self.record_topic = record_topic or f"/{node_name}/pose"
-        self.publish_topic = publish_topic
-        self.knowledge_binding = knowledge
+        if settings is None:
+            if route is None:
+                raise TypeError("needs settings= (or route= for the default settings)")
+            settings = BagReplay(route)
+        elif route is not None:
+            raise TypeError("give settings= or route=, not both")
+        self.settings = settings
+        self.route = settings.route
+        self.rate = float(settings.rate)
+        self.publish_period = 1.0 / float(settings.publish_rate)
+        self.record_topic = settings.record_topic or f"/{node_name}/pose"
+        self.publish_topic = settings.publish_topic
+        self.knowledge_binding = settings.knowledge
         self.pose: PoseSample | None = None
         """The last replayed pose (None before the first move)."""
         self.travelled = 0.0
@@ -162,43 +171,20 @@ class BagNavigationPerformer(ActionPerformer):
     # ------------------------------------------------------------------ config
 
     @classmethod
-    def from_config(
-        cls, config: Mapping[str, Any], context: PerformerContext, *, key: str = "performer"
-    ) -> list[ActionPerformer]:
-        parsed = cls.parse_config(config, key=key)
-        s = parsed.settings
-        if "segments" not in s:
-            raise ConfigError(
-                "missing: the bag segments that serve this performer's moves",
-                key=f"{key}.segments",
-            )
-        for name in ("bag", "topic", "record_topic", "publish_topic"):
-            if name in s and not isinstance(s[name], str):
-                raise ConfigError(f"expected a string, got {s[name]!r}", key=f"{key}.{name}")
+    def prepare(cls, entry: PerformerConfig, context: PerformerContext) -> PerformerConfig:
+        """Read the segments (a file next to the mission, or the list) into a route."""
+        s: RosbagSettings = entry.settings
         route = Route.from_config(
-            s["segments"],
+            s.segments,
             context.base_dir,
-            key=f"{key}.segments",
-            default_bag=s.get("bag"),
-            default_topic=s.get("topic"),
+            key=f"{entry.key}.segments",
+            default_bag=s.bag,
+            default_topic=s.topic,
         )
-        rate = _positive(s.get("rate", 1.0), f"{key}.rate")
-        publish_rate = _positive(s.get("publish_rate", 10.0), f"{key}.publish_rate")
-        binding = KnowledgeBinding.from_config(s.get("knowledge"), f"{key}.knowledge")
-        performer = cls(
-            context,
-            parsed.name,
-            parsed.actions,
-            route=route,
-            rate=rate,
-            publish_rate=publish_rate,
-            record_topic=s.get("record_topic"),
-            publish_topic=s.get("publish_topic"),
-            knowledge=binding,
-            heartbeat_period=parsed.heartbeat_period,
-            commit_timeout=parsed.commit_timeout,
+        replay = BagReplay(
+            route, s.rate, s.publish_rate, s.record_topic, s.publish_topic, s.knowledge
         )
-        return [performer]
+        return replace(entry, settings=replay)
 
     # ------------------------------------------------------------------ hooks
 
@@ -317,9 +303,3 @@ class BagNavigationPerformer(ActionPerformer):
             raise ActionFailed(
                 f"{goal.full_name}: cannot write the pose into the knowledge: {exc}"
             ) from exc
-
-
-def _positive(value: Any, key: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not value > 0:
-        raise ConfigError(f"must be a number > 0, got {value!r}", key=key)
-    return float(value)
