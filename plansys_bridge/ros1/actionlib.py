@@ -7,6 +7,13 @@ Goals are told apart by their GoalID (``callerid-counter-stamp``, as actionlib
 makes them). A goal ends when its result arrives; if the server stops sending
 status for ``server_timeout`` the goal ends LOST, so a dead server never leaves a
 goal waiting forever.
+
+A LOST goal may still be alive in the server (a network split, a stalled process):
+the client keeps it in :attr:`ActionClient.abandoned` and cancels it again when the
+server is back (its status arrives and it listens to our cancel topic again), so a
+returning move_base does not resume driving for an action the caller gave up. It is
+forgotten once the server reports it terminal (or RECALLING: a cancel for a goal the
+server never had), or lists no such goal for ``server_timeout`` after the cancel.
 """
 
 from __future__ import annotations
@@ -23,7 +30,7 @@ from plansys_bridge.ros1.errors import Ros1Error
 from plansys_bridge.ros1.node import Node, resolve_topic
 from plansys_bridge.ros1.topics import Publisher, Subscriber
 
-__all__ = ["ActionClient", "ActionOutcome", "GoalHandle", "GoalStatus"]
+__all__ = ["AbandonedGoal", "ActionClient", "ActionOutcome", "GoalHandle", "GoalStatus"]
 
 
 class GoalStatus(IntEnum):
@@ -57,6 +64,12 @@ _TERMINAL = frozenset(
 )
 
 
+_FORGET = _TERMINAL | {GoalStatus.RECALLING}
+"""Statuses of an abandoned goal after which no cancel is needed any more."""
+MAX_ABANDONED = 64
+"""LOST goals remembered for a cancel at most (the oldest are forgotten first)."""
+
+
 @dataclass(frozen=True)
 class ActionOutcome:
     """How a goal ended: its terminal status, the server's text, the result message."""
@@ -64,6 +77,16 @@ class ActionOutcome:
     status: GoalStatus
     text: str
     result: Any
+
+
+@dataclass
+class AbandonedGoal:
+    """A LOST goal the server must still be told to cancel (monotonic times)."""
+
+    cancelled: float = -float("inf")
+    """When the cancel was last sent to a ready server."""
+    listed: float = -float("inf")
+    """When the server last listed the goal as not yet terminal."""
 
 
 FeedbackCallback = Callable[[Any], None]
@@ -129,6 +152,8 @@ class ActionClient:
         self.goal_type = f"{pkg}/msg/{name}ActionGoal"
         self.server_timeout = server_timeout
         self.goals: dict[str, GoalHandle] = {}
+        self.abandoned: dict[str, AbandonedGoal] = {}
+        """Goals given up as LOST whose cancel is still wanted, by goal id."""
         self.last_status = -float("inf")
         """time.monotonic() of the last status message from the server."""
         self._counter = 0
@@ -136,6 +161,7 @@ class ActionClient:
         self._cancel_pub: Publisher | None = None
         self._subs: list[Subscriber] = []
         self._watch: asyncio.Task[None] | None = None
+        self._was_ready = False
 
     @classmethod
     async def create(
@@ -226,11 +252,35 @@ class ActionClient:
     # ------------------------------------------------------------ server messages
 
     def _on_status(self, msg: Any) -> None:
-        self.last_status = time.monotonic()
+        self.last_status = now = time.monotonic()
         for status in msg.status_list:
-            handle = self.goals.get(status.goal_id.id)
+            goal_id = status.goal_id.id
+            handle = self.goals.get(goal_id)
             if handle is not None:
                 handle._update(status.status, status.text)
+            elif goal_id in self.abandoned:
+                if status.status in _FORGET:
+                    del self.abandoned[goal_id]
+                else:
+                    self.abandoned[goal_id].listed = now
+        self._recancel()
+
+    def _recancel(self) -> None:
+        """Cancel the abandoned goals again now the server is back (and again while
+        it still lists one running); forget those it has not listed for
+        ``server_timeout`` since the cancel (it does not hold them)."""
+        ready = self.server_ready
+        back, self._was_ready = ready and not self._was_ready, ready
+        if not ready:
+            return
+        now = time.monotonic()
+        for goal_id, lost in list(self.abandoned.items()):
+            running = lost.listed > lost.cancelled
+            if back or (running and now - lost.cancelled >= min(1.0, self.server_timeout)):
+                lost.cancelled = now
+                self.cancel(goal_id)
+            elif now - max(lost.cancelled, lost.listed) >= self.server_timeout:
+                del self.abandoned[goal_id]
 
     def _on_feedback(self, msg: Any) -> None:
         handle = self.goals.get(msg.status.goal_id.id)
@@ -244,6 +294,8 @@ class ActionClient:
     def _on_result(self, msg: Any) -> None:
         handle = self.goals.pop(msg.status.goal_id.id, None)
         if handle is None:
+            if msg.status.status in _FORGET:
+                self.abandoned.pop(msg.status.goal_id.id, None)
             return
         try:
             status = GoalStatus(msg.status.status)
@@ -256,14 +308,23 @@ class ActionClient:
     async def _watch_server(self) -> None:
         while True:
             await asyncio.sleep(min(1.0, self.server_timeout / 2))
+            self._recancel()
             if not self.goals or time.monotonic() - self.last_status < self.server_timeout:
                 continue
             for goal_id, handle in list(self.goals.items()):
                 if time.monotonic() - handle.sent < self.server_timeout:
                     continue
                 del self.goals[goal_id]
+                self._abandon(goal_id)
                 handle._finish(
                     GoalStatus.LOST,
                     f"action server {self.ns} sent no status for {self.server_timeout:g} s",
                     None,
                 )
+
+    def _abandon(self, goal_id: str) -> None:
+        """Remember a LOST goal so a returning server is told to cancel it."""
+        self.abandoned[goal_id] = AbandonedGoal()
+        while len(self.abandoned) > MAX_ABANDONED:
+            del self.abandoned[next(iter(self.abandoned))]
+        self._was_ready = False  # the next ready server is a returning one

@@ -6,7 +6,7 @@ import asyncio
 from typing import Any
 
 from plansys_bridge.ros1 import Node
-from plansys_bridge.ros1.actionlib import ActionClient, GoalStatus
+from plansys_bridge.ros1.actionlib import ActionClient, GoalHandle, GoalStatus
 from plansys_bridge.ros1.roscore import Roscore
 
 
@@ -46,21 +46,49 @@ def test_goal_feedback_result_cancel_abort(roscore: Roscore, start_peer: Any) ->
     asyncio.run(main())
 
 
+async def lose_goal(node: Node, ns: str, server: Any) -> tuple[ActionClient, GoalHandle]:
+    """A goal running on ``server`` (a started peer), then the server killed: LOST."""
+    client = await ActionClient.create(node, ns, "move_base_msgs/MoveBase", server_timeout=1.0)
+    assert await client.wait_for_server(20)
+    handle = client.send_goal(goal_to(node, 30.0))
+    while handle.status is not GoalStatus.ACTIVE:
+        await asyncio.sleep(0.05)
+    await asyncio.to_thread(server.stop)
+    outcome = await asyncio.wait_for(handle.result(), 20)
+    assert outcome.status is GoalStatus.LOST
+    assert "sent no status for 1 s" in outcome.text
+    return client, handle
+
+
 def test_server_that_dies_loses_the_goal(roscore: Roscore, start_peer: Any) -> None:
     async def main() -> None:
         server = await asyncio.to_thread(start_peer, "move_base_double.py", "/mb_b", "0.5")
         async with Node("action_lost", master_uri=roscore.uri) as node:
-            client = await ActionClient.create(
-                node, "/mb_b", "move_base_msgs/MoveBase", server_timeout=1.0
+            client, _handle = await lose_goal(node, "/mb_b", server)
+            await client.close()
+
+    asyncio.run(main())
+
+
+def test_a_returning_server_is_told_to_cancel_the_lost_goal(
+    roscore: Roscore, start_peer: Any
+) -> None:
+    async def main() -> None:
+        server = await asyncio.to_thread(start_peer, "move_base_double.py", "/mb_c", "0.5")
+        async with Node("action_back", master_uri=roscore.uri) as node:
+            client, handle = await lose_goal(node, "/mb_c", server)
+            assert list(client.abandoned) == [handle.goal_id]
+            # the server comes back still driving that goal: it must be cancelled
+            back = await asyncio.to_thread(
+                start_peer, "move_base_double.py", "/mb_c", "0.5", handle.goal_id
             )
-            assert await client.wait_for_server(20)
-            handle = client.send_goal(goal_to(node, 30.0))
-            while handle.status is not GoalStatus.ACTIVE:
-                await asyncio.sleep(0.05)
-            await asyncio.to_thread(server.stop)
-            outcome = await asyncio.wait_for(handle.result(), 20)
-            assert outcome.status is GoalStatus.LOST
-            assert "sent no status for 1 s" in outcome.text
+            assert back.seen[0] == f"holding {handle.goal_id}"
+            cancel = await asyncio.to_thread(back.expect, "cancel ")
+            assert cancel == f"cancel {handle.goal_id}"
+            assert await asyncio.to_thread(back.expect, "preempted") == "preempted"
+            async with asyncio.timeout(20):  # PREEMPTED reported: nothing left to cancel
+                while client.abandoned:
+                    await asyncio.sleep(0.05)
             await client.close()
 
     asyncio.run(main())
