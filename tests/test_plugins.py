@@ -73,17 +73,19 @@ def test_builtins_register_through_the_entry_points() -> None:
         ("performers", PERFORMERS),
         ("solvers", SOLVERS),
         ("transports", TRANSPORTS),
+        ("sensing_sources", SENSING_SOURCES),
     ):
         assert project[GROUPS[kind]] == registry.builtin, kind
         installed = {name: ep.value for name, ep in registry.entry_points().items()}
         for name, target in registry.builtin.items():
             assert installed.get(name) == target, f"{kind} {name}: reinstall the package"
-    assert GROUPS["sensing_sources"] in project
 
 
 def test_every_builtin_has_the_shape() -> None:
     """A base class per kind and, on every built-in, a strict pydantic Settings model."""
-    for registry in (SOLVERS, TRANSPORTS):
+    pytest.importorskip("pymavlink", reason="the mavlink sensing source needs pymavlink")
+    pytest.importorskip("cantools", reason="the can sensing source needs cantools")
+    for registry in (SOLVERS, TRANSPORTS, SENSING_SOURCES):
         for name in registry.builtin:
             cls = registry.load(name)
             assert issubclass(cls, registry.base)
@@ -266,13 +268,12 @@ class Loopback(TransportKind):
 """
 
 
-def test_third_party_transport_and_sensing_source(installed: Any, tmp_path: Path) -> None:
+def test_third_party_transport(installed: Any, tmp_path: Path) -> None:
     installed(
         "acme-bus",
-        {"acme_bus": TRANSPORT_PLUGIN + SENSOR_PLUGIN},
+        {"acme_bus": TRANSPORT_PLUGIN},
         {
             GROUPS["transports"]: {"loopback": "acme_bus:Loopback"},
-            GROUPS["sensing_sources"]: {"thermo": "acme_bus:Thermometer"},
         },
     )
     base = (
@@ -289,22 +290,80 @@ def test_third_party_transport_and_sensing_source(installed: Any, tmp_path: Path
     assert type(kind).__name__ == "Loopback" and not kind.distributed
     assert isinstance(kind.create(TransportContext()), InProcessTransport)
 
-    thermo = SENSING_SOURCES.load("thermo")
-    source = thermo(validate_settings(thermo.Settings, {"celsius": True}, key="sensing[0]"))
-    assert isinstance(source, SensingSource)
-    with pytest.raises(ConfigError) as err:
-        validate_settings(thermo.Settings, {"celsius": 1}, key="sensing[0]")
-    assert err.value.key == "sensing[0].celsius"
-
 
 SENSOR_PLUGIN = """
+import asyncio
+
+from pydantic import Field
+
+from plansys_bridge.plugins import PluginSettings
+from plansys_bridge.sensing.expressions import parse_expression
 from plansys_bridge.sensing.source import SensingSource
 
 
 class Thermometer(SensingSource):
+    \"\"\"Plays back ``readings`` (degrees Celsius), one every ``period`` seconds.\"\"\"
+
     class Settings(PluginSettings):
-        celsius: bool = True
+        readings: list[float]
+        period: float = Field(1.0, gt=0)
+
+    def check(self, site):
+        return frozenset({"celsius"})
+
+    def value(self):
+        return parse_expression("celsius")
+
+    def attach(self, performer, feed):
+        async def play():
+            for reading in self.settings.readings:
+                await asyncio.sleep(self.settings.period)
+                feed({"celsius": reading})
+
+        return asyncio.get_running_loop().create_task(play()).cancel
 """
+
+SENSED_MISSION = """\
+sensing:
+  - {from: thermo, period: 0.25, readings: READINGS,
+     when: "celsius > 30", predicate: "(visited r1 hall)"}
+"""
+
+
+def test_third_party_sensing_source_is_found_and_used(installed: Any, tmp_path: Path) -> None:
+    """A sensing source from another distribution: its rule keys are checked by its
+    Settings model when the mission loads, and its samples reach the knowledge."""
+    from plansys_bridge.mission import build_knowledge, load_domain, run_mission
+
+    installed(
+        "acme-sensors",
+        {"acme_sensors": SENSOR_PLUGIN},
+        {GROUPS["sensing_sources"]: {"thermo": "acme_sensors:Thermometer"}},
+    )
+    assert "thermo" in SENSING_SOURCES.names()
+    base = (
+        MISSION.replace("FORCE", "1").replace("gripper", "simulated").replace("    force: 1\n", "")
+    )
+    base = base.replace("  - {kind: oldstyle, name: o1, actions: {move: [r1]}, speed: 2}\n", "")
+    path = tmp_path / "m.yaml"
+    cases = [
+        ("[20, hot]", "hot", "sensing[0].readings[1]: Input should be a valid number, got 'hot'"),
+        ("[20],\n     ratee: 2", "2,", "sensing[0].ratee: unknown key for a thermo rule (allowed:"),
+    ]
+    for readings, anchor, expected in cases:
+        text = base + SENSED_MISSION.replace("READINGS", readings)
+        path.write_text(text)
+        mission = load_mission(path)
+        with pytest.raises(ConfigError) as err:
+            build_knowledge(mission, load_domain(mission))
+        offset = text.index(anchor, text.index("sensing:"))
+        line, column = text.count("\n", 0, offset) + 1, offset - text.rfind("\n", 0, offset)
+        assert str(err.value).startswith(f"{path}:{line}:{column}: {expected}"), str(err.value)
+    path.write_text(base + SENSED_MISSION.replace("READINGS", "[20, 35]"))
+    report = run_mission(load_mission(path), out=None)
+    assert report.success, report.summary()
+    assert any("+(visited r1 hall) (sensed)" in e for e in report.events_applied), report.summary()
+    assert issubclass(SENSING_SOURCES.load("thermo"), SensingSource)
 
 
 @pytest.mark.parametrize(

@@ -12,6 +12,7 @@ exactly when the knowledge would accept its writes.
 from __future__ import annotations
 
 import difflib
+import re
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -22,11 +23,12 @@ from pydantic import BaseModel, ValidationError
 
 from plansys_bridge.errors import ConfigError, PlansysBridgeError, PluginError
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
+from plansys_bridge.plugins import NoSettings, settings_model, validate_settings
 
 from .expressions import Expression, ExpressionError, parse_expression
 from .positions import value_position
 from .rules import RuleConfig, RuleLogic
-from .sources import RuleSite, SensingSource, load_source_kind
+from .source import SENSING_SOURCES, RuleSite, SensingSource
 
 __all__ = ["LoadedRule", "load_rules"]
 
@@ -74,9 +76,8 @@ class _Loader:
         """A ConfigError at ``keys`` (a path below ``sensing``), with line:col when known."""
         path: list[str | int] = ["sensing", *keys]
         key = "sensing" + "".join(f"[{k}]" if isinstance(k, int) else f".{k}" for k in keys)
-        where = self.source_file
         pos = None
-        if Path(where).is_file():
+        if Path(self.source_file).is_file():
             # a missing key is reported at the rule (or whatever encloses it)
             for end in range(len(path), 0, -1):
                 pos = value_position(self.source_file, path[:end])
@@ -84,12 +85,12 @@ class _Loader:
                     if end < len(path):
                         column = None
                     break
-        if pos is not None:
-            col = pos.column
-            if column is not None and pos.text_column is not None:
-                col = pos.text_column + column - 1
-            where = f"{where}:{pos.line}:{col}"
-        return ConfigError(message, key=key, file=where)
+        if pos is None:
+            return ConfigError(message, key=key, file=self.source_file)
+        col = pos.column
+        if column is not None and pos.text_column is not None:
+            col = pos.text_column + column - 1
+        return ConfigError(message, key=key, file=self.source_file, line=pos.line, column=col)
 
     @contextmanager
     def keyed(self, keys: Sequence[str | int]) -> Iterator[None]:
@@ -97,9 +98,7 @@ class _Loader:
             yield
         except ConfigError as exc:
             # A source's error names its own key (``message``); put it under the rule.
-            message = str(exc).removeprefix(f"{exc.key}: ") if exc.key else str(exc)
-            sub = [*keys, *exc.key.split(".")] if exc.key else list(keys)
-            raise self.error(message, sub) from exc
+            raise self.error(exc.reason, [*keys, *_key_parts(exc.key)]) from exc
         except PlansysBridgeError as exc:
             raise self.error(str(exc), keys) from exc
 
@@ -114,7 +113,7 @@ class _Loader:
             msg = str(err["msg"]).removeprefix("Value error, ")
             raise self.error(msg, [index, *loc]) from exc
         try:
-            cls = load_source_kind(config.source)
+            cls = SENSING_SOURCES.load(config.source)
         except PluginError as exc:
             raise self.error(str(exc), [index, "from"]) from exc
         entry = self._performer(cls, config, index)
@@ -127,25 +126,24 @@ class _Loader:
         if config.function is not None and value is None:
             raise self.error(
                 f"a function rule needs a value: the {config.source} source takes it from "
-                f"{' or '.join(sorted(cls.Settings.model_fields))}",
+                f"{' or '.join(sorted(_settings_model(cls).model_fields)) or 'nothing'}",
                 [index],
             )
         self._rehearse(config, index)
         return LoadedRule(f"sensing[{index}]", config, source, when, clear_when, value)
 
     def _source(self, cls: type[SensingSource], config: RuleConfig, index: int) -> SensingSource:
-        model: type[BaseModel] = cls.Settings
+        """The source built from the rule's own keys, validated through its Settings
+        model the way every plugin's settings are (plugins.validate_settings)."""
         try:
-            settings = model.model_validate(config.source_settings)
-        except ValidationError as exc:
-            err = exc.errors()[0]
-            loc = [str(p) if not isinstance(p, int) else p for p in err["loc"]]
-            if err["type"] == "extra_forbidden":
-                known = ", ".join(sorted({*model.model_fields, *_COMMON_KEYS}))
-                msg = f"unknown key for a {config.source} rule (known: {known})"
-            else:
-                msg = str(err["msg"]).removeprefix("Value error, ")
-            raise self.error(msg, [index, *loc]) from exc
+            settings = validate_settings(
+                _settings_model(cls), config.source_settings, known=_COMMON_KEYS
+            )
+        except ConfigError as exc:
+            message = exc.reason
+            if message.startswith("unknown key"):
+                message = message.replace("unknown key", f"unknown key for a {config.source} rule")
+            raise self.error(message, [index, *_key_parts(exc.key)]) from exc
         return cls(settings)
 
     def _performer(
@@ -213,6 +211,16 @@ class _Loader:
                 raise _Rehearsed
         except _Rehearsed:
             pass
+
+
+def _key_parts(key: str | None) -> list[str | int]:
+    """``bus.ids[2]`` -> ``["bus", "ids", 2]`` (a key path back into YAML keys)."""
+    parts = re.findall(r"[^.\[\]]+|\[\d+\]", key or "")
+    return [int(p[1:-1]) if p.startswith("[") else p for p in parts]
+
+
+def _settings_model(cls: type[SensingSource]) -> type[BaseModel]:
+    return settings_model(cls) or NoSettings
 
 
 _COMMON_KEYS = ("from", "performer", "when", "clear_when", "predicate", "function", "every")

@@ -20,12 +20,13 @@ import re
 import secrets
 from typing import Any, ClassVar
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, Field
 
 from plansys_bridge.errors import ConfigError, PlansysBridgeError
+from plansys_bridge.plugins import PluginSettings
 
 from .expressions import Expression, ExpressionError, parse_expression
-from .sources import Detach, Feed, RuleSite, SensingSource, flatten
+from .source import Detach, Feed, RuleSite, SensingSource, flatten
 
 __all__ = ["Ros1TopicSource", "Ros2TopicSource", "field_paths"]
 
@@ -52,9 +53,7 @@ def field_paths(store: Any, type_name: str, prefix: str = "") -> set[str]:
     return paths
 
 
-class RosTopicSettings(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
+class RosTopicSettings(PluginSettings):
     topic: str
     type: str
     """The message type in ROS 2 form: ``sensor_msgs/msg/BatteryState``."""

@@ -24,8 +24,6 @@ from .expressions import Expression, Sample
 
 __all__ = ["Change", "RuleConfig", "RuleLogic"]
 
-SOURCE_KINDS = ("mavlink", "can", "ros1", "ros2")
-
 
 class RuleConfig(BaseModel):
     """The keys every rule has; the source kind checks its own (``message``, ``signal``...)."""

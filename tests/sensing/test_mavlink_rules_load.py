@@ -64,18 +64,18 @@ def test_good_rules_load(tmp_path: Path) -> None:
     [
         (
             {"message": "BATTERY_STATU"},
-            ":15:14:sensing[0].message: no MAVLink message 'BATTERY_STATU' in the ArduPilot "
+            ":15:14: sensing[0].message: no MAVLink message 'BATTERY_STATU' in the ArduPilot "
             "dialect (did you mean BATTERY_STATUS?)",
         ),
         (
             {"when": "battery_remainig < 25"},
-            ":16:11:sensing[0].when: no field 'battery_remainig' in what this rule reads "
+            ":16:11: sensing[0].when: no field 'battery_remainig' in what this rule reads "
             "(did you mean 'battery_remaining'?)",
         ),
-        ({"when": "voltages[10] > 0"}, ":16:11:sensing[0].when: no field 'voltages[10]'"),
-        ({"when": "custom_mode == 4"}, ":16:11:sensing[0].when: no field 'custom_mode'"),
-        ({"field": "voltage_batt / 1000"}, ":21:12:sensing[1].field: SYS_STATUS has no field"),
-        ({"field": "voltage_battery /"}, ":21:12:sensing[1].field: column 18: unexpected"),
+        ({"when": "voltages[10] > 0"}, ":16:11: sensing[0].when: no field 'voltages[10]'"),
+        ({"when": "custom_mode == 4"}, ":16:11: sensing[0].when: no field 'custom_mode'"),
+        ({"field": "voltage_batt / 1000"}, ":21:12: sensing[1].field: SYS_STATUS has no field"),
+        ({"field": "voltage_battery /"}, ":21:12: sensing[1].field: column 18: unexpected"),
     ],
 )
 def test_unknown_messages_and_fields_name_file_line_column_and_key(

@@ -16,7 +16,7 @@ from plansys_bridge.sensing.engine import RuleRunner
 from plansys_bridge.sensing.expressions import parse_expression
 from plansys_bridge.sensing.load import LoadedRule
 from plansys_bridge.sensing.rules import Change, RuleConfig, RuleLogic
-from plansys_bridge.sensing.sources import SensingSource
+from plansys_bridge.sensing.source import SensingSource
 
 DOMAIN = (Path(__file__).resolve().parents[1] / "data" / "sensing_bases.pddl").read_text()
 

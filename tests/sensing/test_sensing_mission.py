@@ -156,5 +156,5 @@ def test_a_bad_rule_is_a_load_error_naming_file_line_column_and_key(
 ) -> None:
     path = _mission(tmp_path, **{old: new})
     text = _load_error(path)
-    where = f"{path}:{_place(path.read_text(), anchor)}:"
+    where = f"{path}:{_place(path.read_text(), anchor)}: "
     assert text.startswith(where + expected), text

@@ -18,20 +18,19 @@ from typing import Any, ClassVar
 import can
 import cantools
 from cantools.database.can import Database
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel
 
 from plansys_bridge.errors import ConfigError
+from plansys_bridge.plugins import PluginSettings
 from plansys_bridge.sensing.expressions import Expression, parse_expression
-from plansys_bridge.sensing.sources import Detach, Feed, RuleSite, SensingSource
+from plansys_bridge.sensing.source import Detach, Feed, RuleSite, SensingSource
 
 from .dbc import default_dbc_path
 
 __all__ = ["CanSignalSource"]
 
 
-class CanSignalSettings(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
+class CanSignalSettings(PluginSettings):
     signal: str
     """``MESSAGE.SIGNAL`` of the performer's DBC."""
 

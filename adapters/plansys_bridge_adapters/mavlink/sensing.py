@@ -15,22 +15,21 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from plansys_bridge.errors import ConfigError
+from plansys_bridge.plugins import PluginSettings
 from plansys_bridge.sensing.expressions import Expression, ExpressionError, parse_expression
-from plansys_bridge.sensing.sources import Detach, Feed, RuleSite, SensingSource
+from plansys_bridge.sensing.source import Detach, Feed, RuleSite, SensingSource
 
 __all__ = ["MavlinkMessageSource", "message_fields", "message_sample"]
 
 _CLASSES: dict[str, Any] = {cls.msgname: cls for cls in mavlink2.mavlink_map.values()}
 
 
-class MavlinkMessageSettings(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
+class MavlinkMessageSettings(PluginSettings):
     message: str
     """A message of the ArduPilot dialect, e.g. ``BATTERY_STATUS``."""
     field: str | None = None
