@@ -19,6 +19,14 @@ header); topics are ``rt/<name>``. Goal ids are ``unique_identifier_msgs/UUID``
 (16 random bytes). Cancel requests follow ``rcl_action_process_cancel_request``: a
 zero goal id and zero stamp cancel every goal, a zero id with a stamp every goal
 accepted at or before it, an id that goal (plus, with a stamp, the earlier ones).
+
+rcl_action's client waits for a result forever; this one ends a goal
+:data:`STATUS_LOST` when the server's services stay unmatched for ``server_timeout``
+(the server process died or dropped off the network), so the caller can give up.
+Such a goal may still be running in a server that returns, so the client keeps it
+in :attr:`ActionClient.abandoned` and sends ``cancel_goal`` for it whenever the
+server is back, until the server reports it terminal (status topic, or a cancel
+answered ERROR_GOAL_TERMINATED / ERROR_UNKNOWN_GOAL_ID).
 """
 
 from __future__ import annotations
@@ -39,6 +47,7 @@ from plansys_bridge.ros2.services import ServiceClient, ServiceServer
 
 __all__ = [
     "GOAL_STATUS",
+    "STATUS_LOST",
     "ActionClient",
     "ActionServer",
     "ClientGoal",
@@ -55,7 +64,11 @@ _TERMINAL = {_S["STATUS_SUCCEEDED"], _S["STATUS_CANCELED"], _S["STATUS_ABORTED"]
 _CANCEL = ros2_constants("action_msgs/srv/CancelGoal_Response")
 KEEP_TERMINAL = 64
 """How many ended goals an action server keeps for get_result and the status topic."""
-STATUS_NAMES = {v: k.removeprefix("STATUS_") for k, v in _S.items()}
+STATUS_LOST = -1
+"""Not a ROS 2 status: the client gave the goal up because its server went away."""
+STATUS_NAMES = {v: k.removeprefix("STATUS_") for k, v in _S.items()} | {STATUS_LOST: "LOST"}
+MAX_ABANDONED = 64
+"""LOST goals remembered for a cancel at most (the oldest are forgotten first)."""
 
 
 def action_names(action: str) -> dict[str, str]:
@@ -283,6 +296,9 @@ class ClientGoal:
     client: ActionClient
     status: int = _S["STATUS_UNKNOWN"]
     on_feedback: Callable[[Any], None] | None = None
+    text: str = ""
+    """Why a LOST goal was given up."""
+    lost: asyncio.Event = field(default_factory=asyncio.Event)
 
     async def result(self, timeout: float | None = None) -> tuple[int, Any]:
         """Wait for the terminal status and the result (get_result service)."""
@@ -296,8 +312,17 @@ class ClientGoal:
 class ActionClient:
     """Sends goals to a ROS 2 action server, follows feedback and status."""
 
-    def __init__(self, node: Ros2Node, action: str, action_type: str) -> None:
+    def __init__(
+        self, node: Ros2Node, action: str, action_type: str, *, server_timeout: float = 5.0
+    ) -> None:
         self.node = node
+        self.server_timeout = server_timeout
+        """Seconds the server may stay unmatched before its running goals end LOST."""
+        self.abandoned: dict[bytes, bool] = {}
+        """Goals given up as LOST whose cancel is still wanted: goal id -> whether the
+        server, while up, answered it (it is asked again if it goes and comes back)."""
+        self._watch: asyncio.Task[None] | None = None
+        self._result_type = dds_type(f"{action_type}_Result")
         self.action_type = action_type
         self.names = action_names(action)
         self._send = ServiceClient(node, self.names["send_goal"], f"{action_type}_SendGoal")
@@ -335,6 +360,7 @@ class ActionClient:
         goal_id = uuid.uuid4().bytes
         handle = ClientGoal(goal_id, False, self, on_feedback=on_feedback)
         self._goals[goal_id] = handle
+        self._watch_server()
         request = self._send.request(goal_id=_uuid(goal_id), goal=goal)
         try:
             reply = await self._send.call(request, timeout=timeout)
@@ -351,11 +377,22 @@ class ActionClient:
     async def get_result(
         self, handle: ClientGoal, *, timeout: float | None = None
     ) -> tuple[int, Any]:
+        """The terminal status and result, or (:data:`STATUS_LOST`, an empty result)
+        once the server has been gone for ``server_timeout``."""
         request = self._result.request(goal_id=_uuid(handle.goal_id))
+        call = asyncio.ensure_future(self._result.call(request, timeout=timeout or 1e9))
+        lost = asyncio.ensure_future(handle.lost.wait())
         try:
-            reply = await self._result.call(request, timeout=timeout or 1e9)
+            await asyncio.wait((call, lost), return_when=asyncio.FIRST_COMPLETED)
         finally:
+            answered = call.done()
+            call.cancel()
+            lost.cancel()
             self._goals.pop(handle.goal_id, None)
+        if not answered:
+            handle.status = STATUS_LOST
+            return handle.status, self._result_type()
+        reply = call.result()
         handle.status = int(reply.status)
         return handle.status, reply.result
 
@@ -370,11 +407,70 @@ class ActionClient:
 
     def _on_status(self, sample: Any) -> None:
         for entry in sample.status_list:
-            handle = self._goals.get(_goal_id(entry.goal_info.goal_id))
+            goal_id = _goal_id(entry.goal_info.goal_id)
+            handle = self._goals.get(goal_id)
             if handle is not None:
                 handle.status = int(entry.status)
+            elif int(entry.status) in _TERMINAL:
+                self.abandoned.pop(goal_id, None)
+
+    # -- a server that goes away and comes back -------------------------------------------
+    def _watch_server(self) -> None:
+        if self._watch is None or self._watch.done():
+            self._watch = asyncio.get_running_loop().create_task(
+                self._watching(), name=f"action client {self.names['send_goal']}"
+            )
+
+    async def _watching(self) -> None:
+        """While goals run or wait for a cancel: lose them when the server is gone for
+        ``server_timeout``, cancel the lost ones whenever it is there."""
+        loop = asyncio.get_running_loop()
+        gone_since: float | None = None
+        while self._goals or self.abandoned:
+            await asyncio.sleep(min(0.5, self.server_timeout / 4))
+            if self.is_ready():
+                gone_since = None
+                for goal_id in [g for g, answered in self.abandoned.items() if not answered]:
+                    await self._recancel(goal_id)
+                continue
+            self.abandoned = dict.fromkeys(self.abandoned, False)  # ask a returning server
+            gone_since = loop.time() if gone_since is None else gone_since
+            if loop.time() - gone_since >= self.server_timeout:
+                self._lose_goals()
+
+    def _lose_goals(self) -> None:
+        for goal_id, handle in list(self._goals.items()):
+            if not handle.accepted or handle.lost.is_set():
+                continue
+            handle.text = (
+                f"action server {self.names['send_goal'].rpartition('/_action')[0]} "
+                f"gone for {self.server_timeout:g} s"
+            )
+            handle.lost.set()
+            self.abandoned[goal_id] = False
+            while len(self.abandoned) > MAX_ABANDONED:
+                del self.abandoned[next(iter(self.abandoned))]
+
+    async def _recancel(self, goal_id: bytes) -> None:
+        info = dds_type("action_msgs/msg/GoalInfo")(goal_id=_uuid(goal_id))
+        try:
+            reply = await self._cancel.call(
+                self._cancel.request(goal_info=info), timeout=self.server_timeout
+            )
+        except HubError as exc:  # asked again on the next round
+            log.debug("action %s: cancel of a lost goal: %s", self.names["cancel_goal"], exc)
+            return
+        code = int(reply.return_code)
+        if code in (_CANCEL["ERROR_UNKNOWN_GOAL_ID"], _CANCEL["ERROR_GOAL_TERMINATED"]):
+            self.abandoned.pop(goal_id, None)
+        elif goal_id in self.abandoned:  # until the status topic says it has ended
+            self.abandoned[goal_id] = True
 
     async def close(self) -> None:
+        if self._watch is not None:
+            self._watch.cancel()
+            await asyncio.gather(self._watch, return_exceptions=True)
+            self._watch = None
         for client in (self._send, self._result, self._cancel):
             await client.close()
         self.node.remove(self._feedback, self._status)

@@ -7,7 +7,9 @@ argument, the last by default) in ``locations`` and sends a
 drives, ``distance_remaining`` becomes the action's completion (the fraction of the
 largest distance seen so far). SUCCEEDED finishes the action; ABORTED fails it with
 Nav2's ``error_code`` and ``error_msg``; CANCELED (by someone else) fails it too. A
-halt from the executor cancels the Nav2 goal (``cancel_goal``).
+halt from the executor cancels the Nav2 goal (``cancel_goal``). A Nav2 server gone
+for ``lost_after`` seconds mid-goal fails the action LOST; should that server come
+back still driving the goal, the client cancels it (:mod:`plansys_bridge.ros2.actions`).
 
 A destination of the mission that ``locations`` lacks is an error when the mission
 starts, naming the key. Without a Nav2 server on the domain the performer does not
@@ -29,7 +31,13 @@ from plansys_bridge.performers.base import (
     ActionPerformer,
     PerformerContext,
 )
-from plansys_bridge.ros2.actions import GOAL_STATUS, STATUS_NAMES, ActionClient, ClientGoal
+from plansys_bridge.ros2.actions import (
+    GOAL_STATUS,
+    STATUS_LOST,
+    STATUS_NAMES,
+    ActionClient,
+    ClientGoal,
+)
 from plansys_bridge.ros2.node import Ros2Node
 
 from ..nav_goals import Pose2D, check_destinations
@@ -48,6 +56,8 @@ class Nav2Performer(ActionPerformer):
     settings_keys: ClassVar[frozenset[str]] = frozenset(
         {"action_name", "frame_id", "target_arg", "locations", "domain_id", "double"}
     )
+    lost_after: float = 5.0
+    """Seconds a Nav2 server may be gone mid-goal before the action fails LOST."""
 
     def __init__(
         self,
@@ -119,7 +129,9 @@ class Nav2Performer(ActionPerformer):
             ).start()
         self._node = Ros2Node(self.domain_id, config=config, name=self.node_name)
         await self._node.start()
-        self._client = ActionClient(self._node, self.settings.action_name, NAV_TYPE)
+        self._client = ActionClient(
+            self._node, self.settings.action_name, NAV_TYPE, server_timeout=self.lost_after
+        )
 
     async def teardown(self) -> None:
         if self._client is not None:
@@ -206,6 +218,8 @@ class Nav2Performer(ActionPerformer):
         self._goal = None
         if status == GOAL_STATUS["STATUS_SUCCEEDED"]:
             return f"reached {name}"
+        if status == STATUS_LOST:
+            raise ActionFailed(f"{action} LOST the goal to {name}: {handle.text}")
         detail = f"error_code {result.error_code}" + (
             f": {result.error_msg}" if result.error_msg else ""
         )

@@ -1,20 +1,8 @@
-"""The ``ros2_nav2`` performer against an independent NavigateToPose action server.
-
-The server below is a plain Cyclone DDS program. Its types are typed here from the
-upstream texts (nav2_msgs/action/NavigateToPose.action, jazzy; geometry_msgs Pose,
-PoseStamped, Point, Quaternion; std_msgs/Header) and in ros2_upstream.py
-(builtin_interfaces, unique_identifier_msgs, action_msgs), framed as rcl_action and
-rmw_cyclonedds put them on the wire:
-``<action>/_action/{send_goal,get_result,cancel_goal}`` services with the
-``{uint64 guid; int64 seq}`` request header, ``rt/<action>/_action/feedback`` and
-``rt/<action>/_action/status`` topics, and rosidl's derived action messages
-(``NavigateToPose_SendGoal_Request_`` = goal_id + goal, ...).
-"""
+"""The ``ros2_nav2`` performer against an independent NavigateToPose action server
+(tests/nav2_peer.py: plain Cyclone DDS, types from the upstream texts)."""
 
 import asyncio
 import random
-import time
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -22,30 +10,9 @@ import pytest
 
 pytest.importorskip("cyclonedds", reason="cyclonedds (extra 'dds') is not installed")
 
-from cyclonedds.domain import DomainParticipant
-from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import float32, int16, uint16
-from cyclonedds.pub import DataWriter
-from cyclonedds.sub import DataReader
-from cyclonedds.topic import Topic
+from nav2_peer import RawNavigateToPoseServer
 from plansys_bridge_adapters.ros2_nav2.performer import Nav2Performer
-from ros2_upstream import (
-    ABORTED,
-    CANCELED,
-    EXECUTING,
-    SUCCEEDED,
-    UUID_,
-    CancelGoalRequest_,
-    CancelGoalResponse_,
-    Duration_,
-    GoalInfo_,
-    GoalStatus_,
-    GoalStatusArray_,
-    PoseStamped_,
-    Time_,
-    action_types,
-    qos,
-)
+from ros2_upstream import CANCELED, SUCCEEDED
 
 from plansys_bridge.clock import WallClock
 from plansys_bridge.errors import ConfigError
@@ -58,132 +25,6 @@ from plansys_bridge.performers.base import PerformerContext
 pytestmark = [pytest.mark.timeout(90), pytest.mark.usefixtures("no_leaks")]
 
 DOMAIN = Path(__file__).resolve().parents[3] / "configs" / "pddl" / "flat_navigation.pddl"
-
-
-# -- upstream types, typed from the .msg/.action/.srv texts -----------------------------
-@dataclass
-class Goal_(IdlStruct, typename="nav2_msgs::action::dds_::NavigateToPose_Goal_"):
-    pose: PoseStamped_ = field(default_factory=PoseStamped_)
-    behavior_tree: str = ""
-
-
-@dataclass
-class Result_(IdlStruct, typename="nav2_msgs::action::dds_::NavigateToPose_Result_"):
-    error_code: uint16 = 0
-    error_msg: str = ""
-
-
-@dataclass
-class Feedback_(IdlStruct, typename="nav2_msgs::action::dds_::NavigateToPose_Feedback_"):
-    current_pose: PoseStamped_ = field(default_factory=PoseStamped_)
-    navigation_time: Duration_ = field(default_factory=Duration_)
-    estimated_time_remaining: Duration_ = field(default_factory=Duration_)
-    number_of_recoveries: int16 = 0
-    distance_remaining: float32 = 0.0
-
-
-NAV = action_types("nav2_msgs", "NavigateToPose", Goal_, Result_, Feedback_)
-SendGoalRequest_ = NAV.SendGoalRequest_
-SendGoalResponse_ = NAV.SendGoalResponse_
-GetResultRequest_ = NAV.GetResultRequest_
-GetResultResponse_ = NAV.GetResultResponse_
-FeedbackMessage_ = NAV.FeedbackMessage_
-
-
-class RawNavigateToPoseServer:
-    """NavigateToPose as a ROS 2 action server on rmw_cyclonedds would serve it.
-
-    Goals to x=4 succeed after feedback 3, 2, 1, 0 m; goals to x=9 are ABORTED with
-    error_code 204; other goals run until cancelled.
-    """
-
-    def __init__(self, domain: int, action: str = "/navigate_to_pose") -> None:
-        self.dp = dp = DomainParticipant(domain)
-        base = f"{action}/_action"
-
-        def service(name: str, req: type, rep: type) -> tuple[Any, Any]:
-            reader = DataReader(dp, Topic(dp, f"rq{base}/{name}Request", req), qos())
-            writer = DataWriter(dp, Topic(dp, f"rr{base}/{name}Reply", rep), qos())
-            return reader, writer
-
-        self.send = service("send_goal", SendGoalRequest_, SendGoalResponse_)
-        self.result = service("get_result", GetResultRequest_, GetResultResponse_)
-        self.cancel = service("cancel_goal", CancelGoalRequest_, CancelGoalResponse_)
-        self.feedback = DataWriter(dp, Topic(dp, f"rt{base}/feedback", FeedbackMessage_), qos())
-        self.status = DataWriter(
-            dp, Topic(dp, f"rt{base}/status", GoalStatusArray_), qos(1, latched=True)
-        )
-        self.goals: dict[bytes, dict[str, Any]] = {}
-        self.cancels: list[bytes] = []
-        self.waiting: list[Any] = []
-        self._task: asyncio.Task[None] | None = None
-
-    def start(self) -> None:
-        self._task = asyncio.get_running_loop().create_task(self._serve())
-
-    async def close(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            await asyncio.gather(self._task, return_exceptions=True)
-        self.dp.__del__()
-
-    def _publish_status(self) -> None:
-        self.status.write(
-            GoalStatusArray_(
-                [
-                    GoalStatus_(GoalInfo_(UUID_(list(gid))), g["status"])
-                    for gid, g in self.goals.items()
-                ]
-            )
-        )
-
-    async def _serve(self) -> None:
-        while True:
-            now = time.monotonic()
-            for req in self.send[0].take(N=10):
-                gid = bytes(req.goal_id.uuid)
-                x = req.goal.pose.pose.position.x
-                self.goals[gid] = {"x": x, "status": EXECUTING, "t": now, "left": 3}
-                self.send[1].write(
-                    SendGoalResponse_(req.guid, req.seq, True, Time_(int(time.time())))
-                )
-                self._publish_status()
-            for req in self.cancel[0].take(N=10):
-                gid = bytes(req.goal_info.goal_id.uuid)
-                self.cancels.append(gid)
-                goal = self.goals.get(gid)
-                canceling = []
-                if goal is not None and goal["status"] == EXECUTING:
-                    goal["status"] = CANCELED
-                    goal["result"] = Result_()
-                    canceling = [GoalInfo_(UUID_(list(gid)))]
-                self.cancel[1].write(CancelGoalResponse_(req.guid, req.seq, 0, canceling))
-                self._publish_status()
-            self.waiting.extend(self.result[0].take(N=10))
-            for gid, goal in self.goals.items():
-                if goal["status"] != EXECUTING or now - goal["t"] < 0.05:
-                    continue
-                goal["t"] = now
-                if goal["x"] == 9.0:
-                    goal["status"], goal["result"] = ABORTED, Result_(204, "no valid path")
-                elif goal["x"] == 4.0:
-                    fb = Feedback_(distance_remaining=float(goal["left"]))
-                    self.feedback.write(FeedbackMessage_(UUID_(list(gid)), fb))
-                    if goal["left"] == 0:
-                        goal["status"], goal["result"] = SUCCEEDED, Result_()
-                    goal["left"] -= 1
-                else:
-                    fb = Feedback_(distance_remaining=40.0)
-                    self.feedback.write(FeedbackMessage_(UUID_(list(gid)), fb))
-                self._publish_status()
-            for req in list(self.waiting):
-                goal = self.goals.get(bytes(req.goal_id.uuid))
-                if goal is not None and goal["status"] in (SUCCEEDED, CANCELED, ABORTED):
-                    self.result[1].write(
-                        GetResultResponse_(req.guid, req.seq, goal["status"], goal["result"])
-                    )
-                    self.waiting.remove(req)
-            await asyncio.sleep(0.005)
 
 
 LOCATIONS = {
