@@ -165,14 +165,21 @@ class PluginRegistry(Generic[T]):
         return obj
 
     def _missing_module(self, name: str, reference: str, exc: ModuleNotFoundError) -> str:
-        missing = (exc.name or "").split(".")[0]
-        extra = EXTRA_FOR_MODULE.get(missing)
-        if extra is None and _installed(missing):
-            # the package is there but the module the entry point names is not
+        """Why ``reference`` did not import: a module that is not there although its
+        package is installed (a misspelt entry point, or a bad import inside the
+        plugin) is named as such; only a package that is not installed at all is an
+        optional dependency to install, with the extra that provides it if it is ours."""
+        missing_name = exc.name or ""
+        missing = missing_name.split(".")[0]
+        if _installed(missing):
+            module = reference.partition(":")[0]
+            misspelt = module == missing_name or module.startswith(missing_name + ".")
+            why = "is the entry point misspelt?" if misspelt else f"{module} imports it"
             return (
                 f"{self.what} {name!r} points at {reference}: "
-                f"no module named {exc.name!r} (is the entry point misspelt?)"
+                f"no module named {missing_name!r} ({why})"
             )
+        extra = EXTRA_FOR_MODULE.get(missing)
         hint = (
             f"install it with: pip install 'plansys-bridge[{extra}]'"
             if extra

@@ -17,7 +17,7 @@ import pytest
 from pydantic import Field
 
 from plansys_bridge import plugins
-from plansys_bridge.errors import ConfigError
+from plansys_bridge.errors import ConfigError, PluginError
 from plansys_bridge.hub.transport import InProcessTransport
 from plansys_bridge.hub.transport_kinds import TRANSPORTS, DdsKind, TransportContext
 from plansys_bridge.mission_config import load_mission
@@ -410,3 +410,39 @@ def test_converted_builtin_performers_declare_settings_models() -> None:
 
     for name in ("can", "mavlink", "ros1_move_base"):
         assert has_settings_model(PERFORMERS.load(name)), name
+
+
+def test_a_missing_module_is_told_apart_from_a_missing_package(installed: Any) -> None:
+    """``pkg.missing_module:X`` with pkg installed names the module (also for a package
+    that is one of our extras); only a package that is not installed is a dependency."""
+    pytest.importorskip("can", reason="needs python-can installed (the can extra)")
+    installed(
+        "acme-typos",
+        {
+            "acme_typos": "",
+            "acme_inner": "import can.no_such_interface\n",
+            "acme_needs": "import acme_not_installed_anywhere\n",
+        },
+        {
+            GROUPS["performers"]: {
+                "own": "acme_typos.missing_module:Gripper",
+                "extra": "can.no_such_module:Gripper",
+                "inner": "acme_inner:Gripper",
+                "needs": "acme_needs:Gripper",
+            }
+        },
+    )
+    expected = {
+        "own": "points at acme_typos.missing_module:Gripper: no module named "
+        "'acme_typos.missing_module' (is the entry point misspelt?)",
+        "extra": "no module named 'can.no_such_module' (is the entry point misspelt?)",
+        "inner": "no module named 'can.no_such_interface' (acme_inner imports it)",
+        "needs": "needs the optional dependency 'acme_not_installed_anywhere'; "
+        "install the package that provides 'acme_not_installed_anywhere'",
+    }
+    for name, words in expected.items():
+        with pytest.raises(PluginError) as err:
+            PERFORMERS.load(name)
+        assert words in str(err.value), str(err.value)
+        if name != "needs":
+            assert "install" not in str(err.value)
