@@ -12,37 +12,26 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Annotated, ClassVar, Protocol
 
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.pddl.types import TypeHierarchy
 from plansys_bridge.plugins import PluginSettings
 
-from .checks import mapping
-
 if TYPE_CHECKING:
     from plansys_bridge.knowledge.problem_expert import ProblemExpert
 
 __all__ = [
+    "LocationPose",
+    "LocationTable",
     "NavGoalSettings",
     "Pose2D",
     "check_destinations",
-    "parse_locations",
-    "parse_target_arg",
+    "check_table",
+    "poses",
 ]
-
-
-class NavGoalSettings(PluginSettings):
-    """The keys both navigation performers take (their ``Settings`` extend this)."""
-
-    frame_id: str = Field("map", min_length=1)
-    """The frame of the goal poses."""
-    target_arg: int = -1
-    """The action argument naming the destination (-1 = the last)."""
-    locations: Any = Field(...)
-    """``{name: {x, y, yaw}}``: where each destination is."""
 
 
 @dataclass(frozen=True)
@@ -58,46 +47,70 @@ class Pose2D:
         return (0.0, 0.0, math.sin(self.yaw / 2), math.cos(self.yaw / 2))
 
 
-def _number(value: object, key: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise ConfigError(f"must be a finite number, got {value!r}", key=key)
-    return float(value)
+class LocationPose(PluginSettings):
+    """``{x, y, yaw?}``: one destination, in metres and radians in ``frame_id``."""
+
+    x: float
+    y: float
+    yaw: float = 0.0
 
 
-def parse_target_arg(value: object, key: str) -> int:
-    """``target_arg``: which action argument names the destination (-1 = the last)."""
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise ConfigError(f"must be an argument index (e.g. -1 = last), got {value!r}", key=key)
+LocationTable = Annotated[dict[str, LocationPose], Field(min_length=1)]
+"""``{name: {x, y, yaw}}``, names case-insensitive."""
+
+TABLE_SHAPE = (
+    "must map each destination to {x, y, yaw}, e.g. {kitchen: {x: 4.0, y: 1.0, yaw: 1.57}}"
+)
+
+
+def check_table(value: object, *, files: bool = False) -> object:
+    """The table's shape, before pydantic checks each pose: one clear error for a
+    value that is no mapping (or, with ``files``, no file name), a name that is no
+    string, or a name given twice in different case."""
+    if files and isinstance(value, str):
+        if not value.strip():
+            raise ValueError("must name a locations file or be a mapping of locations")
+        return value
+    if not isinstance(value, Mapping):
+        also = " (or name a YAML file holding that mapping)" if files else ""
+        raise ValueError(f"{TABLE_SHAPE}{also}; got {value!r}")
+    seen: set[str] = set()
+    for name in value:
+        if not isinstance(name, str) or not name.strip():
+            raise ValueError(f"destination names must be non-empty strings, got {name!r}")
+        lowered = name.strip().lower()
+        if lowered in seen:
+            raise ValueError(f"destination {lowered!r} given twice (names are case-insensitive)")
+        seen.add(lowered)
     return value
 
 
-def parse_locations(places: object, where: str) -> dict[str, Pose2D]:
-    """``{name: {x, y, yaw}}`` (names case-insensitive); errors name the key under ``where``."""
-    if not isinstance(places, Mapping) or not places:
-        raise ConfigError(
-            "must map each destination to {x, y, yaw}, e.g. {kitchen: {x: 4.0, y: 1.0, yaw: 1.57}}",
-            key=where,
-        )
-    locations: dict[str, Pose2D] = {}
-    for name, spec in places.items():
-        here = f"{where}.{name}"
-        if not isinstance(name, str) or not name.strip():
-            raise ConfigError(f"destination names must be strings, got {name!r}", key=where)
-        pose = mapping(spec, here, ("x", "y", "yaw"), "must be {x: M, y: M, yaw: RAD}")
-        for axis in ("x", "y"):
-            if axis not in pose:
-                raise ConfigError(f"missing {axis}", key=here)
-        lname = name.strip().lower()
-        if lname in locations:
-            raise ConfigError(
-                f"destination {lname!r} given twice (names are case-insensitive)", key=here
-            )
-        locations[lname] = Pose2D(
-            _number(pose["x"], f"{here}.x"),
-            _number(pose["y"], f"{here}.y"),
-            _number(pose.get("yaw", 0.0), f"{here}.yaw"),
-        )
-    return locations
+def poses(table: Mapping[str, LocationPose]) -> dict[str, Pose2D]:
+    """A validated table as the performers look destinations up: by lower-case name."""
+    return {name.strip().lower(): Pose2D(p.x, p.y, p.yaw) for name, p in table.items()}
+
+
+class NavGoalSettings(PluginSettings):
+    """The keys both navigation performers take (their ``Settings`` extend this).
+
+    The location table is checked here, with the rest of the entry, so a bad pose is
+    an error when the mission loads (file:line:col and key path), not when the
+    performer is built."""
+
+    locations_files: ClassVar[bool] = False
+    """Whether ``locations`` may instead name a YAML file holding the table."""
+
+    frame_id: str = Field("map", min_length=1)
+    """The frame of the goal poses."""
+    target_arg: int = -1
+    """The action argument naming the destination (-1 = the last)."""
+    locations: LocationTable
+    """``{name: {x, y, yaw}}``: where each destination is."""
+
+    @field_validator("locations", mode="before")
+    @classmethod
+    def _table_shape(cls, value: object) -> object:
+        return check_table(value, files=cls.locations_files)
 
 
 class _Destinations(Protocol):

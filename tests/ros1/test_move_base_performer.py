@@ -174,7 +174,7 @@ def test_destination_without_location_is_a_load_error() -> None:
         ({"target_arg": 5}, "performers[0].target_arg"),
         ({"target_arg": "last"}, "performers[0].target_arg"),
         ({"master_uri": "localhost:11311"}, "performers[0].master_uri"),
-        ({"locations": {"hall": {"x": 1.0}}}, "performers[0].locations.hall"),
+        ({"locations": {"hall": {"x": 1.0}}}, "performers[0].locations.hall.y"),
         ({"locations": {"hall": {"x": 1.0, "y": 2.0, "z": 3.0}}}, "performers[0].locations.hall.z"),
         ({"locations": []}, "performers[0].locations"),
         ({"frame": "map"}, "performers[0].frame"),

@@ -12,8 +12,10 @@
         target_arg: -1                        # the argument naming the destination
         locations: {hall: {x: 0.0, y: 0.0, yaw: 0.0}, kitchen: {x: 4.0, y: 1.0, yaw: 1.57}}
 
-Every object the domain lets a served action go to must have a location: a missing
-one is an error naming the key when the mission loads, not a failure mid-mission.
+The location table is part of :class:`MoveBaseEntry`, so a malformed one is an error
+when the mission loads, naming file:line:col and the key path. Every object the
+domain lets a served action go to must have a location: a missing one is an error
+naming the key when the performer is built, not a failure mid-mission.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from plansys_bridge.ros1.errors import Ros1Error
 from plansys_bridge.ros1.master import check_uri
 from plansys_bridge.ros1.node import DEFAULT_MASTER_URI, resolve_topic
 
-from ..nav_goals import NavGoalSettings, Pose2D, check_destinations, parse_locations
+from ..nav_goals import NavGoalSettings, Pose2D, check_destinations, poses
 
 __all__ = ["MoveBaseEntry", "MoveBaseSettings", "Pose2D", "check_destinations", "resolve"]
 
@@ -61,5 +63,6 @@ def resolve(entry: MoveBaseEntry, key: str) -> MoveBaseSettings:
         action_ns = resolve_topic(entry.action_ns.strip())
     except Ros1Error as exc:
         raise ConfigError(str(exc), key=f"{key}.action_ns") from exc
-    locations = parse_locations(entry.locations, f"{key}.locations")
-    return MoveBaseSettings(master_uri, action_ns, entry.frame_id, entry.target_arg, locations)
+    return MoveBaseSettings(
+        master_uri, action_ns, entry.frame_id, entry.target_arg, poses(entry.locations)
+    )

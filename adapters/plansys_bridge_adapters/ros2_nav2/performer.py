@@ -22,7 +22,8 @@ import asyncio
 import logging
 import time
 from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from dataclasses import replace
+from typing import Any
 
 from plansys_bridge.interfaces.dds import dds_type
 from plansys_bridge.performers.base import (
@@ -31,6 +32,7 @@ from plansys_bridge.performers.base import (
     ActionPerformer,
     PerformerContext,
 )
+from plansys_bridge.performers.entry import PerformerConfig
 from plansys_bridge.ros2.actions import (
     GOAL_STATUS,
     STATUS_LOST,
@@ -41,7 +43,7 @@ from plansys_bridge.ros2.actions import (
 from plansys_bridge.ros2.node import Ros2Node
 
 from ..nav_goals import Pose2D, check_destinations
-from .settings import NavSettings
+from .settings import Nav2Settings, NavSettings, resolve
 
 __all__ = ["Nav2Performer"]
 
@@ -53,9 +55,7 @@ NAV_TYPE = "nav2_msgs/action/NavigateToPose"
 class Nav2Performer(ActionPerformer):
     """Drives a ROS 2 robot through Nav2's NavigateToPose action (see module docs)."""
 
-    settings_keys: ClassVar[frozenset[str]] = frozenset(
-        {"action_name", "frame_id", "target_arg", "locations", "domain_id", "double"}
-    )
+    Settings = Nav2Settings
     lost_after: float = 5.0
     """Seconds a Nav2 server may be gone mid-goal before the action fails LOST."""
 
@@ -64,7 +64,6 @@ class Nav2Performer(ActionPerformer):
         context: PerformerContext,
         node_name: str,
         actions: Mapping[str, Sequence[str]],
-        *,
         settings: NavSettings,
         **common: Any,
     ) -> None:
@@ -87,22 +86,11 @@ class Nav2Performer(ActionPerformer):
         self._warned_absent = False
 
     @classmethod
-    def from_config(
-        cls, config: Mapping[str, Any], context: PerformerContext, *, key: str = "performer"
-    ) -> list[ActionPerformer]:
-        parsed = cls.parse_config(config, key=key)
-        settings = NavSettings.parse(parsed.settings, key, context.base_dir)
-        check_destinations(settings, parsed.actions, context.knowledge, key)
-        return [
-            cls(
-                context,
-                parsed.name,
-                parsed.actions,
-                settings=settings,
-                heartbeat_period=parsed.heartbeat_period,
-                commit_timeout=parsed.commit_timeout,
-            )
-        ]
+    def prepare(cls, entry: PerformerConfig, context: PerformerContext) -> PerformerConfig:
+        """A locations file read; every destination the domain allows has a location."""
+        settings = resolve(entry.settings, entry.key, context.base_dir)
+        check_destinations(settings, entry.actions, context.knowledge, entry.key)
+        return replace(entry, settings=settings)
 
     # -- lifecycle ---------------------------------------------------------------------
     async def setup(self) -> None:
@@ -117,12 +105,12 @@ class Nav2Performer(ActionPerformer):
             self._double = await Nav2Double(
                 self.domain_id,
                 action_name=self.settings.action_name,
-                speed=float(self.settings.double.get("speed", 1.0)),
+                speed=self.settings.double.speed,
                 blocked=[
                     (loc.x, loc.y)
                     for loc in (
-                        self.settings.locations[b.lower()]
-                        for b in self.settings.double.get("blocked", [])
+                        self.settings.locations[b.strip().lower()]
+                        for b in self.settings.double.blocked
                     )
                 ],
                 config=config,

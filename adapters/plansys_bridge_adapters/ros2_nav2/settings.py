@@ -14,7 +14,10 @@ by changing ``kind`` and the connection keys::
       domain_id: 0                    # default: the mission's DDS domain, else 0
       double: {speed: 1.0, blocked: []}  # optional: a Nav2 double on the domain
 
-``locations`` is a mapping or a YAML file (relative to the mission file) holding one.
+``locations`` is a mapping or a YAML file (relative to the mission file) holding one
+(optionally under a ``locations:`` key). :class:`Nav2Settings` is validated when the
+mission loads, an inline table included; :func:`resolve` reads a locations file and
+checks the double's ``blocked`` names when the performer is built.
 """
 
 from __future__ import annotations
@@ -22,66 +25,90 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import ClassVar
+
+from pydantic import Field
 
 from plansys_bridge.errors import ConfigError
+from plansys_bridge.plugins import PluginSettings, validate_settings
+from plansys_bridge.yaml_files import load_yaml_document
 
-from ..checks import mapping, positive
-from ..nav_goals import Pose2D, parse_locations, parse_target_arg
+from ..nav_goals import LocationTable, NavGoalSettings, Pose2D, poses
 
-__all__ = ["NavSettings", "load_locations"]
+__all__ = ["Nav2Double", "Nav2Settings", "NavSettings", "load_locations", "resolve"]
 
 
-def load_locations(value: object, key: str, base_dir: Path) -> dict[str, Pose2D]:
-    """``{name: {x, y, yaw}}`` inline, or the name of a YAML file holding that mapping
-    (optionally under a ``locations:`` key), relative to the mission file."""
-    if isinstance(value, str):
-        from plansys_bridge.yaml_files import load_yaml_file
+class Nav2Double(PluginSettings):
+    """``double:``: run a NavigateToPose double on the performer's domain."""
 
-        path = base_dir / value
-        value = load_yaml_file(path, "locations file", key)
-        if isinstance(value, Mapping) and set(value) == {"locations"}:
-            value = value["locations"]
-        key = str(path)
-    return parse_locations(value, key)
+    speed: float = Field(1.0, gt=0)
+    """Metres per second of the pretend robot."""
+    blocked: list[str] = Field(default_factory=list)
+    """Location names whose goals the double aborts (no valid path)."""
+
+
+class Nav2Settings(NavGoalSettings):
+    """The kind-specific keys of a ``ros2_nav2`` entry."""
+
+    locations_files: ClassVar[bool] = True
+
+    action_name: str = Field("navigate_to_pose", pattern=r"[^/\s]")
+    """The NavigateToPose action (Nav2's bt_navigator serves ``navigate_to_pose``)."""
+    locations: LocationTable | str  # type: ignore[assignment]  # a file name too
+    """``{name: {x, y, yaw}}``, or a YAML file holding it (read when built)."""
+    domain_id: int | None = Field(None, ge=0)
+    """Default: the mission's DDS domain, else 0."""
+    double: Nav2Double | None = None
 
 
 @dataclass(frozen=True)
 class NavSettings:
-    """The checked settings of one ``ros2_nav2`` performer."""
+    """What the performer runs with: :class:`Nav2Settings` with its file read."""
 
     action_name: str
     frame_id: str
     target_arg: int
     locations: Mapping[str, Pose2D]
     domain_id: int | None
-    double: Mapping[str, Any] | None
+    double: Nav2Double | None = None
 
-    @classmethod
-    def parse(cls, settings: Mapping[str, Any], key: str, base_dir: Path) -> NavSettings:
-        action = settings.get("action_name", "navigate_to_pose")
-        if not isinstance(action, str) or not action.strip("/ "):
-            raise ConfigError("expected an action name", key=f"{key}.action_name")
-        frame = settings.get("frame_id", "map")
-        if not isinstance(frame, str) or not frame:
-            raise ConfigError("expected a frame id", key=f"{key}.frame_id")
-        target = parse_target_arg(settings.get("target_arg", -1), f"{key}.target_arg")
-        locations = load_locations(settings.get("locations"), f"{key}.locations", base_dir)
-        domain = settings.get("domain_id")
-        if domain is not None and (isinstance(domain, bool) or not isinstance(domain, int)):
-            raise ConfigError("expected a DDS domain id", key=f"{key}.domain_id")
-        double = settings.get("double")
-        if double is not None:
-            double = mapping(
-                double, f"{key}.double", ("speed", "blocked"), "expected {speed, blocked}"
+
+def load_locations(value: str, key: str, base_dir: Path) -> dict[str, Pose2D]:
+    """The table in the YAML file ``value`` (relative to the mission file), bare or
+    under a ``locations:`` key; a bad entry is an error naming the file's line and
+    column and the key path inside the file."""
+    path = Path(value)
+    path = path if path.is_absolute() else base_dir / path
+    loaded, positions = load_yaml_document(path, "locations file", key)
+    wrapped = isinstance(loaded, Mapping) and set(loaded) == {"locations"}
+    try:
+        table = validate_settings(NavGoalSettings, loaded if wrapped else {"locations": loaded})
+    except ConfigError as exc:
+        inner = exc.key if wrapped or exc.key is None else exc.key.partition(".")[2] or None
+        raise positions.relocate(ConfigError(exc.reason, key=inner)) from exc
+    return poses(table.locations)
+
+
+def resolve(settings: Nav2Settings, key: str, base_dir: Path) -> NavSettings:
+    """The performer's settings: a locations file read, the double's names checked."""
+    where = f"{key}.locations"
+    table = (
+        load_locations(settings.locations, where, base_dir)
+        if isinstance(settings.locations, str)
+        else poses(settings.locations)
+    )
+    double = settings.double
+    for i, name in enumerate(double.blocked if double is not None else ()):
+        if name.strip().lower() not in table:
+            raise ConfigError(
+                f"{name!r} is not a location (known: {', '.join(sorted(table))})",
+                key=f"{key}.double.blocked[{i}]",
             )
-            positive(double.get("speed", 1.0), f"{key}.double.speed")
-            blocked = double.get("blocked", [])
-            if not isinstance(blocked, list) or any(
-                not isinstance(b, str) or b.lower() not in locations for b in blocked
-            ):
-                raise ConfigError(
-                    "expected a list of location names whose goals the double aborts",
-                    key=f"{key}.double.blocked",
-                )
-        return cls(action.strip(), frame, target, locations, domain, double)
+    return NavSettings(
+        settings.action_name.strip(),
+        settings.frame_id,
+        settings.target_arg,
+        table,
+        settings.domain_id,
+        double,
+    )
