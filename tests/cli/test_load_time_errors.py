@@ -8,6 +8,8 @@ performer offers.
 
 from __future__ import annotations
 
+import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -76,6 +78,19 @@ def test_negative_default_alt_names_the_key(
     )
 
 
+def test_negative_default_alt_in_a_locations_file_names_its_place_and_the_mission_key(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    places = tmp_path / "places.yaml"
+    places.write_text("locations:\n  pad: {north: 0, east: 0}\ndefault_alt: -5\n")
+    path = copter(tmp_path, locations="places.yaml")
+    assert main(["run", str(path)]) == 2
+    assert error_line(capsys) == (
+        f"error: {places}:3:1: default_alt: must be > 0 metres above home, got -5 "
+        "(in the locations file of performers[0].locations)"
+    )
+
+
 def test_nul_byte_in_a_locations_path(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = copter(tmp_path, locations="places\0.yaml")
     assert main(["run", str(path)]) == 2
@@ -109,6 +124,17 @@ def test_missing_domain_names_the_mission_file_and_key(
     )
 
 
+@pytest.mark.parametrize(("value", "shown"), [(math.nan, "nan"), (3, "3"), (True, "True")])
+def test_a_domain_that_is_not_a_path_names_the_mission_file_and_key(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], value: Any, shown: str
+) -> None:
+    path = _cooking(tmp_path, domain=value)
+    assert main(["run", str(path)]) == 2
+    assert error_line(capsys) == (
+        f"error: {path}:3:1: domain: a domain file path or a list of them, got {shown}"
+    )
+
+
 @pytest.mark.parametrize("depth", [101, 400, 5000])
 def test_deeply_nested_yaml_names_file_and_place(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], depth: int
@@ -119,8 +145,8 @@ def test_deeply_nested_yaml_names_file_and_place(
     )
     assert main(["run", str(path)]) == 2
     line = error_line(capsys)
-    assert line.startswith(f"error: {path}:3:")
-    assert "performers[0].tags" in line and "nested more than 100 levels deep" in line
+    assert re.match(rf"error: {re.escape(str(path))}:3:\d+: performers\[0\]\.tags\[0\]", line)
+    assert "nested more than 100 levels deep" in line
 
 
 def test_nesting_within_the_limit_is_plain_yaml(tmp_path: Path) -> None:

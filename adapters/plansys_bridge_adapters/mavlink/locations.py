@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from plansys_bridge.errors import ConfigError
-from plansys_bridge.yaml_files import load_yaml_file
+from plansys_bridge.yaml_files import load_yaml_document
 
 from .geo import GeoPoint, offset
 
@@ -76,14 +76,26 @@ class LocationMap:
 def load_locations(spec: str | Path | Mapping[str, Any], base_dir: Path, key: str) -> LocationMap:
     """A :class:`LocationMap` from a YAML file path (relative to ``base_dir``) or a mapping.
 
-    Errors are :class:`ConfigError` naming the file and the offending key.
+    Errors are :class:`ConfigError` naming the offending key; in a file, with the
+    file's line and column and the mission key that named the file (the mistake is
+    in the locations file, but the user starts from the mission).
     """
     if isinstance(spec, str | Path):
         path = Path(spec)
         if not path.is_absolute():
             path = base_dir / path
-        data = load_yaml_file(path, "locations file", key)
-        return parse_locations(data, source=str(path), key="")
+        data, positions = load_yaml_document(path, "locations file", key)
+        try:
+            return parse_locations(data, source=str(path), key="")
+        except ConfigError as exc:
+            placed = positions.relocate(exc)
+            raise ConfigError(
+                f"{placed.reason} (in the locations file of {key})",
+                key=placed.key,
+                file=placed.file,
+                line=placed.line,
+                column=placed.column,
+            ) from exc
     return parse_locations(spec, source=key, key=key)
 
 
