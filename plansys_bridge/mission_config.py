@@ -189,7 +189,11 @@ class MissionConfig(_Strict):
     @field_validator("domain", mode="before")
     @classmethod
     def _domain_list(cls, value: Any) -> Any:
-        return [value] if isinstance(value, str) else value
+        if isinstance(value, str):
+            return [value]
+        if not isinstance(value, list):  # YAML's .nan, 3, true: "valid list" would mislead
+            raise ValueError(f"a domain file path or a list of them, got {value!r}")
+        return value
 
     @model_validator(mode="after")
     def _has_goal(self) -> MissionConfig:

@@ -72,7 +72,9 @@ def _check_depth(text: str, path: Path, key: str | None) -> None:
                 raise ConfigError(
                     f"nested more than {MAX_YAML_DEPTH} levels deep",
                     key=f"{key}: {where}" if key else where,
-                    file=f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else str(path),
+                    file=str(path),
+                    line=mark.line + 1 if mark else None,
+                    column=mark.column + 1 if mark else None,
                 )
             stack.append([isinstance(event, yaml.MappingStartEvent), True, 0])
             continue
