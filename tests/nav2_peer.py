@@ -11,6 +11,7 @@ and ``rt/<action>/_action/status`` topics, and rosidl's derived action messages
 """
 
 import asyncio
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -39,7 +40,7 @@ from ros2_upstream import (
     qos,
 )
 
-__all__ = ["Feedback_", "Goal_", "RawNavigateToPoseServer", "Result_"]
+__all__ = ["Feedback_", "Goal_", "RawNavigateToPoseServer", "Result_", "ServerThread"]
 
 
 # -- upstream types, typed from the .msg/.action/.srv texts -----------------------------
@@ -79,7 +80,11 @@ class RawNavigateToPoseServer:
     error_code 204; other goals run until cancelled.
     """
 
-    def __init__(self, domain: int, action: str = "/navigate_to_pose") -> None:
+    def __init__(
+        self, domain: int, action: str = "/navigate_to_pose", *, period: float = 0.05
+    ) -> None:
+        self.period = period
+        """Seconds between two steps of a goal (feedback, the next metre)."""
         self.dp = dp = DomainParticipant(domain)
         base = f"{action}/_action"
 
@@ -149,7 +154,7 @@ class RawNavigateToPoseServer:
                 self._publish_status()
             self.waiting.extend(self.result[0].take(N=10))
             for gid, goal in self.goals.items():
-                if goal["status"] != EXECUTING or now - goal["t"] < 0.05:
+                if goal["status"] != EXECUTING or now - goal["t"] < self.period:
                     continue
                 goal["t"] = now
                 if goal["x"] == 9.0:
@@ -172,3 +177,46 @@ class RawNavigateToPoseServer:
                     )
                     self.waiting.remove(req)
             await asyncio.sleep(0.005)
+
+
+class ServerThread:
+    """A :class:`RawNavigateToPoseServer` on its own thread and event loop, for tests
+    whose loop is made by a harness (the performer contract): ``start()``, ``stop()``.
+
+    The domain is opened first by a project node, as the performers' tests do, so
+    Cyclone uses the project's loopback configuration."""
+
+    def __init__(self, domain: int, *, period: float = 0.05) -> None:
+        self.domain = domain
+        self.period = period
+        self.server: RawNavigateToPoseServer | None = None
+        self._up = threading.Event()
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._stop: asyncio.Event | None = None
+        self._thread = threading.Thread(target=asyncio.run, args=(self._serve(),), daemon=True)
+
+    async def _serve(self) -> None:
+        from plansys_bridge.ros2.node import Ros2Node
+
+        self._loop, self._stop = asyncio.get_running_loop(), asyncio.Event()
+        node = Ros2Node(self.domain, name="nav2_peer")
+        await node.start()
+        self.server = RawNavigateToPoseServer(self.domain, period=self.period)
+        self.server.start()
+        self._up.set()
+        try:
+            await self._stop.wait()
+        finally:
+            await self.server.close()
+            await node.close()
+
+    def start(self) -> "ServerThread":
+        self._thread.start()
+        if not self._up.wait(30):
+            raise RuntimeError("the Nav2 peer did not start in 30 s")
+        return self
+
+    def stop(self) -> None:
+        if self._loop is not None and self._stop is not None:
+            self._loop.call_soon_threadsafe(self._stop.set)
+        self._thread.join(30)
