@@ -10,10 +10,11 @@ goal waiting forever.
 
 A LOST goal may still be alive in the server (a network split, a stalled process):
 the client keeps it in :attr:`ActionClient.abandoned` and cancels it again when the
-server is back (its status arrives and it listens to our cancel topic again), so a
-returning move_base does not resume driving for an action the caller gave up. It is
-forgotten once the server reports it terminal (or RECALLING: a cancel for a goal the
-server never had), or lists no such goal for ``server_timeout`` after the cancel.
+server is back (its status arrives and it listens to our cancel topic again) and
+while the server still reports the goal running (status, feedback), so a returning
+move_base does not resume driving for an action the caller gave up. It is forgotten
+once the server reports it terminal (or RECALLING: a cancel for a goal the server
+never had), or lists no such goal for ``server_timeout`` after the cancel.
 """
 
 from __future__ import annotations
@@ -284,6 +285,10 @@ class ActionClient:
 
     def _on_feedback(self, msg: Any) -> None:
         handle = self.goals.get(msg.status.goal_id.id)
+        lost = self.abandoned.get(msg.status.goal_id.id)
+        if lost is not None:  # a goal given up is being driven: say cancel again
+            lost.listed = time.monotonic()
+            self._recancel()
         if handle is None or handle.done:
             return
         handle._update(msg.status.status, msg.status.text)

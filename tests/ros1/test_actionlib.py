@@ -92,3 +92,24 @@ def test_a_returning_server_is_told_to_cancel_the_lost_goal(
             await client.close()
 
     asyncio.run(main())
+
+
+def test_a_restarted_server_without_the_goal_lets_it_be_forgotten(
+    roscore: Roscore, start_peer: Any
+) -> None:
+    """A move_base restarted from scratch never had the goal: it is told to cancel
+    it once (actionlib lists it RECALLING) and the client stops asking."""
+
+    async def main() -> None:
+        server = await asyncio.to_thread(start_peer, "move_base_double.py", "/mb_d", "0.5")
+        async with Node("action_fresh", master_uri=roscore.uri) as node:
+            client, handle = await lose_goal(node, "/mb_d", server)
+            fresh = await asyncio.to_thread(start_peer, "move_base_double.py", "/mb_d", "0.5")
+            cancel = await asyncio.to_thread(fresh.expect, "cancel ")
+            assert cancel == f"cancel {handle.goal_id}"
+            async with asyncio.timeout(20):
+                while client.abandoned:
+                    await asyncio.sleep(0.05)
+            await client.close()
+
+    asyncio.run(main())
