@@ -73,3 +73,44 @@ def test_a_returning_server_is_told_to_cancel_the_lost_goal() -> None:
     gid, back = asyncio.run(main())
     assert back.cancels == [gid]
     assert back.goals[gid]["status"] == CANCELED
+
+
+def test_a_restarted_server_without_the_goal_lets_it_be_forgotten() -> None:
+    """A Nav2 started afresh answers the cancel ERROR_UNKNOWN_GOAL_ID: the client
+    stops asking (here the fresh server is the project's own Nav2 double)."""
+    from plansys_bridge_adapters.ros2_nav2.double import NAV_TYPE, Nav2Double
+
+    from plansys_bridge.interfaces.dds import dds_type
+    from plansys_bridge.ros2.actions import STATUS_LOST, ActionClient
+    from plansys_bridge.ros2.node import Ros2Node
+
+    async def main() -> None:
+        domain = random.SystemRandom().randint(1, 232)
+        node = Ros2Node(domain, name="lost_goal_test")
+        await node.start()
+        client = ActionClient(node, "navigate_to_pose", NAV_TYPE, server_timeout=1.0)
+        server = RawNavigateToPoseServer(domain)
+        server.start()
+        fresh = None
+        try:
+            await client.wait_for_server(20)
+            goal = dds_type(f"{NAV_TYPE}_Goal")()
+            goal.pose.pose.position.x = 30.0
+            handle = await client.send_goal(goal)
+            result = asyncio.ensure_future(handle.result())
+            await _until(lambda: handle.goal_id in server.goals, 10, "the goal")
+            await server.close()
+            status, _ = await asyncio.wait_for(result, 20)
+            assert status == STATUS_LOST and "gone for 1 s" in handle.text
+            assert list(client.abandoned) == [handle.goal_id]
+            fresh = await Nav2Double(domain).start()
+            await _until(lambda: not client.abandoned, 20, "the unknown goal forgotten")
+            assert fresh.goals == []
+        finally:
+            if fresh is not None:
+                await fresh.close()
+            await server.close()
+            await client.close()
+            await node.close()
+
+    asyncio.run(main())
