@@ -9,6 +9,8 @@ its yaw) through the project's own ROS 1 client, and
 * finishes on SUCCEEDED; fails with move_base's status text on ABORTED, REJECTED,
   PREEMPTED (or RECALLED / LOST);
 * cancels the goal (``<action_ns>/cancel``) when the executor halts the action;
+* fails LOST when move_base sends no status for 5 s mid-goal, and cancels that goal
+  should move_base come back still driving it (:mod:`plansys_bridge.ros1.actionlib`);
 * is NOT_READY, and does not bid, while the master does not answer or no move_base
   server listens; the node logs an unreachable master once, not per retry.
 """
