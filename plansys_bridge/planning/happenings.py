@@ -10,8 +10,8 @@ happening carries its step's bindings.
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
-from typing import Literal
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Literal
 
 from plansys_bridge.pddl.model import (
     NO_EFFECT,
@@ -21,6 +21,9 @@ from plansys_bridge.pddl.model import (
     DurativeAction,
     Effect,
 )
+
+if TYPE_CHECKING:
+    from plansys_bridge.planning.mutex import GroundParts
 
 __all__ = ["SAME_TIME", "BoundStep", "Happening", "Point", "simultaneous"]
 
@@ -70,6 +73,8 @@ class Happening:
     point: Point
     bound: BoundStep
     duration: float | None
+    parts: GroundParts | None = field(default=None, compare=False, repr=False)
+    """Its condition and effect with the step's arguments in place (plain actions)."""
 
     @property
     def bindings(self) -> Mapping[str, str]:

@@ -18,67 +18,62 @@ The report names the first failing step (in time order) and the failing part of 
 condition, with numeric values where they explain the failure. Conditions and
 effects are evaluated lifted, with each step's bindings (substituting the arguments
 into every formula of every step was a third of a validation); what interferes is
-worked out by :mod:`~plansys_bridge.planning.mutex`.
+worked out by :mod:`~plansys_bridge.planning.mutex`. A plain action's condition,
+effect and footprint come from one grounding per happening
+(:mod:`~plansys_bridge.planning.ground_parts`), and its adds and deletes go into a
+:class:`~plansys_bridge.planning.validation_state.WorkingState` rather than a new
+state snapshot each: the planner validates every plan it returns, so this is on the
+way from knowledge to plan.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.knowledge.evaluation import Evaluator
 from plansys_bridge.knowledge.grounding import substitute_condition
-from plansys_bridge.knowledge.state import FluentKey, State
+from plansys_bridge.knowledge.state import State
 from plansys_bridge.pddl.model import (
+    NO_EFFECT,
     And,
-    Atom,
-    Compare,
+    AnyAction,
+    BinaryOp,
     Condition,
     Domain,
+    DurationConstraint,
     DurativeAction,
+    Negate,
+    Number,
     Problem,
 )
+from plansys_bridge.pddl.walkers import iter_nodes
 from plansys_bridge.planning.happenings import SAME_TIME, BoundStep, Happening, simultaneous
-from plansys_bridge.planning.mutex import Footprint, Footprints
+from plansys_bridge.planning.mutex import (
+    CompiledParts,
+    Footprint,
+    Footprints,
+    GroundParts,
+    interference,
+)
 from plansys_bridge.planning.plan import Plan, PlanStep
+from plansys_bridge.planning.validation_report import (
+    ValidationReport,
+    describe,
+    initial_state,
+    plan_time,
+)
+from plansys_bridge.planning.validation_state import WorkingState
 
 __all__ = ["DEFAULT_EPSILON", "ValidationReport", "initial_state", "validate_plan"]
 
+_ActionParts = tuple[CompiledParts | None, CompiledParts | None, CompiledParts | None]
+"""(start, end or instant, over all) of one action, for :meth:`CompiledParts.ground`."""
+
 DEFAULT_EPSILON = 0.001
 _SLACK = 1e-6
-
-
-@dataclass(frozen=True)
-class ValidationReport:
-    """The verdict on a plan. ``failing_step`` / ``failing_condition`` are set when
-    a step's condition or duration fails; a missed goal sets only ``failing_condition``."""
-
-    valid: bool
-    message: str
-    failing_step: PlanStep | None = None
-    failing_condition: str | None = None
-    failing_index: int | None = None
-    """Index of the failing step in the plan as given."""
-    time: float | None = None
-    """When the failure happens on the plan's timeline."""
-    makespan: float = 0.0
-    final_state: State | None = field(default=None, compare=False, repr=False)
-
-    def __bool__(self) -> bool:
-        return self.valid
-
-    def __str__(self) -> str:
-        return self.message
-
-
-def initial_state(domain: Domain, problem: Problem) -> State:
-    """The problem's initial state: its facts, fluent values, objects and the constants."""
-    objects = {c.name: c.types[0] for c in domain.constants}
-    objects.update({o.name: o.types[0] for o in problem.objects})
-    fluents = {(fv.fluent.name, tuple(fv.fluent.args)): fv.value for fv in problem.init_fluents}
-    return State(problem.init, fluents, objects)
 
 
 class _Prints:
@@ -86,20 +81,25 @@ class _Prints:
     only simultaneous steps and happenings closer than epsilon are compared, and
     computing every footprint was most of a validation's time."""
 
-    def __init__(self, validator: _Validator, group: list[Happening], state: State) -> None:
+    def __init__(self, validator: _Validator, group: list[Happening], now: WorkingState) -> None:
         self._validator = validator
         self._group = group
-        self._state = state
-        self._prints: list[tuple[Happening, Footprint]] | None = None
+        # the evaluator works out what a happening that is not plain touches, in the
+        # state of its time
+        self._state = now.state() if any(h.parts is None for h in group) else None
+        self._prints: list[tuple[Happening, GroundParts | Footprint]] | None = None
 
-    def get(self) -> list[tuple[Happening, Footprint]]:
+    def get(self) -> list[tuple[Happening, GroundParts | Footprint]]:
+        """Each happening with what it touches: its parts when it is plain."""
         if self._prints is None:
-            footprints = self._validator.footprints
             self._prints = [
-                (h, footprints.of(h.condition, h.effect, h.bindings, self._state))
-                for h in self._group
+                (h, h.parts if h.parts is not None else self._asked(h)) for h in self._group
             ]
         return self._prints
+
+    def _asked(self, h: Happening) -> Footprint:
+        assert self._state is not None  # set when a happening is not plain
+        return self._validator.footprints.of(h.condition, h.effect, h.bindings, self._state)
 
 
 class _Invalid(Exception):
@@ -139,8 +139,13 @@ class _Validator:
         self.plan = plan
         self.ev = Evaluator(domain)
         self.footprints = Footprints(self.ev)
-        self._over_all_reads: dict[int, tuple[set[Atom], set[FluentKey]] | None] = {}
+        self._over_all: dict[int, GroundParts | None] = {}
+        """Each durative step's over-all condition with its arguments in place."""
+        self._constant_durations: dict[int, float] = {}
+        self._compiled: dict[int, _ActionParts] = {}
+        self._typed: dict[tuple[str, tuple[str, ...]], bool] = {}
         self.state = state if state is not None else initial_state(domain, problem)
+        self._objects = dict(self.state.objects)
         self.epsilon = epsilon
         self.duration_tolerance = duration_tolerance
 
@@ -156,7 +161,7 @@ class _Validator:
         step = self.plan.steps[index] if index is not None else None
         where = ""
         if index is not None and step is not None:
-            where = f"step {index + 1} {step.text} at {_t(step.time)}: "
+            where = f"step {index + 1} {step.text} at {plan_time(step.time)}: "
         return _Invalid(
             ValidationReport(
                 False,
@@ -173,13 +178,14 @@ class _Validator:
 
     def run(self) -> ValidationReport:
         happenings = self._happenings()
-        state = self.state
+        now = WorkingState(self.state)
         open_steps: dict[int, Happening] = {}
         recent: list[tuple[float, _Prints]] = []
         for group in simultaneous(happenings):
-            state = self._group(group, state, open_steps, recent)
+            self._group(group, now, open_steps, recent)
         for h in open_steps.values():  # only reachable with inconsistent input
             raise self.fail(h.index, "never ends")
+        state = now.state()
         self._goal(state)
         return ValidationReport(
             True,
@@ -193,35 +199,74 @@ class _Validator:
         for i, step in enumerate(self.plan.steps):
             if not math.isfinite(step.time) or step.time < 0:
                 raise self.fail(i, f"start time {step.time} is not a time >= 0")
-            try:
-                action, bindings = self.ev.bind(step.action, step.arguments, self.state)
-            except PlansysBridgeError as exc:
-                raise self.fail(i, str(exc)) from exc
+            action, bindings = self._bind(i, step)
             g = BoundStep(action, bindings)
+            compiled = self._compiled.get(id(action))
+            if compiled is None:
+                compiled = self._compiled[id(action)] = self._compile(action, tuple(bindings))
+            values = tuple(bindings.values())
+            start, end, over_all = (
+                None if c is None else c.ground(values, bindings) for c in compiled
+            )
             if isinstance(action, DurativeAction):
                 if not math.isfinite(step.duration) or step.duration < 0:
                     raise self.fail(i, f"duration {step.duration} is not a duration >= 0")
-                out.append(Happening(step.time, i, "start", g, step.duration))
-                out.append(Happening(step.time + step.duration, i, "end", g, step.duration))
+                self._over_all[i] = over_all
+                out.append(Happening(step.time, i, "start", g, step.duration, start))
+                out.append(Happening(step.time + step.duration, i, "end", g, step.duration, end))
             else:
-                out.append(Happening(step.time, i, "instant", g, None))
+                out.append(Happening(step.time, i, "instant", g, None, end))
         out.sort(key=Happening.sort_key)
         return out
+
+    def _compile(self, action: AnyAction, names: tuple[str, ...]) -> _ActionParts:
+        """What grounds an action's start, end (or instant) and over-all parts."""
+        compiled = self.footprints.compiled
+        if isinstance(action, DurativeAction):
+            return (
+                compiled(action.at_start, action.start_effect, names),
+                compiled(action.at_end, action.end_effect, names),
+                compiled(action.over_all, NO_EFFECT, names),
+            )
+        return (None, compiled(action.precondition, action.effect, names), None)
+
+    def _bind(self, index: int, step: PlanStep) -> tuple[AnyAction, dict[str, str]]:
+        """The step's action and bindings; its arguments must be objects of the
+        parameters' types (each object and type checked once per validation)."""
+        try:
+            action, bindings = self.ev.bind(step.action, step.arguments)
+        except PlansysBridgeError as exc:
+            raise self.fail(index, str(exc)) from exc
+        typed = self._typed
+        for param, arg in zip(action.parameters, bindings.values(), strict=True):
+            key = (arg, param.types)
+            ok = typed.get(key)
+            if ok is None:
+                kind = self._objects.get(arg)
+                ok = typed[key] = kind is not None and self.ev.types.is_subtype_of_any(
+                    (kind,), param.types
+                )
+            if not ok:
+                try:  # the evaluator's own words for what is wrong
+                    self.ev.bind(step.action, step.arguments, self.state)
+                except PlansysBridgeError as exc:
+                    raise self.fail(index, str(exc)) from exc
+        return action, bindings
 
     def _group(
         self,
         group: list[Happening],
-        state: State,
+        state: WorkingState,
         open_steps: dict[int, Happening],
         recent: list[tuple[float, _Prints]],
-    ) -> State:
+    ) -> None:
         now = group[0].time
         prints = _Prints(self, group, state)
         for h in group:
             if h.point == "start":
                 self._check_duration(h, state)
             try:
-                self._check(h, h.condition, h.when, state)
+                self._check(h, h.condition, h.when, state, parts=h.parts)
             except _Invalid as exc:
                 raise self._explain_simultaneous(exc, h, prints.get()) from None
         pairs = prints.get() if len({h.index for h in group}) > 1 else []
@@ -231,7 +276,7 @@ class _Validator:
                 hb, fb = pairs[b]
                 if ha.index == hb.index:
                     continue
-                shared = fa.interferes(fb)
+                shared = interference(fa, fb)
                 if shared is not None:
                     other = self.plan.steps[ha.index]
                     raise self.fail(
@@ -242,21 +287,7 @@ class _Validator:
                         now,
                     )
         self._check_separation(now, prints, recent)
-        changed: set[object] = set()
-        for h in group:
-            quick = self.footprints.changes(h.effect, h.bindings)
-            try:
-                adds, deletes, values = (
-                    (*quick, {})
-                    if quick is not None
-                    else self.ev.changes(h.effect, state, h.bindings, h.duration)
-                )
-            except PlansysBridgeError as exc:
-                raise self.fail(
-                    h.index, f"{h.point} effect cannot be applied: {exc}", None, now
-                ) from exc
-            state = state.with_changes(adds=adds, deletes=deletes, fluents=values)
-            changed.update(adds, deletes, values)
+        changed = self._apply(group, state, now)
         started = set()
         for h in group:
             if h.point == "start":
@@ -268,8 +299,38 @@ class _Validator:
             h = open_steps[index]
             end = h.time + (h.duration or 0.0)
             if end - now > SAME_TIME and (index in started or self._touched(h, changed)):
-                self._check(h, h.bound.over_all, "over all condition", state, now)
-        return state
+                self._check(
+                    h, h.bound.over_all, "over all condition", state, now, self._over_all.get(index)
+                )
+
+    def _apply(self, group: list[Happening], state: WorkingState, now: float) -> set[object]:
+        """Apply the group's effects to ``state``; every atom (as ``(predicate,
+        arguments)``) and fluent they changed.
+
+        Each happening's effect is worked out in the state after those before it in
+        the group (for distinct steps the mutex check has made the order irrelevant;
+        the start and end of one step at one time apply in that order).
+        """
+        changed: set[object] = set()
+        for h in group:
+            parts = h.parts
+            if parts is not None and parts.plain_effect:
+                state.change(parts.adds, parts.deletes)
+                changed.update(parts.adds, parts.deletes)
+                continue
+            try:
+                adds, deletes, values = self.ev.changes(
+                    h.effect, state.state(), h.bindings, h.duration
+                )
+            except PlansysBridgeError as exc:
+                raise self.fail(
+                    h.index, f"{h.point} effect cannot be applied: {exc}", None, now
+                ) from exc
+            state.apply(adds, deletes, values)
+            changed.update([(a.predicate, a.args) for a in adds])
+            changed.update([(a.predicate, a.args) for a in deletes])
+            changed.update(values)
+        return changed
 
     def _touched(self, h: Happening, changed: set[object]) -> bool:
         """Could the changes of this group have made ``h``'s over-all condition false?
@@ -279,22 +340,21 @@ class _Validator:
         """
         if not changed:
             return False
-        if h.index not in self._over_all_reads:
-            self._over_all_reads[h.index] = self.footprints.reads(h.bound.over_all, h.bindings)
-        reads = self._over_all_reads[h.index]
-        if reads is None:
-            return True
-        atoms, fluents = reads
-        return not (changed.isdisjoint(atoms) and changed.isdisjoint(fluents))
+        parts = self._over_all.get(h.index)
+        return parts is None or not changed.isdisjoint(parts.reads())
 
     def _explain_simultaneous(
-        self, exc: _Invalid, h: Happening, prints: list[tuple[Happening, Footprint]]
+        self,
+        exc: _Invalid,
+        h: Happening,
+        prints: list[tuple[Happening, GroundParts | Footprint]],
     ) -> _Invalid:
         """A condition false only because its achiever happens at the same time: say so."""
         failing = exc.report.failing_condition
-        for other, footprint in prints:
+        for other, print_ in prints:
             if other.index == h.index or failing is None:
                 continue
+            footprint = print_.footprint() if isinstance(print_, GroundParts) else print_
             if failing in {str(a) for a in footprint.adds | footprint.deletes}:
                 step = self.plan.steps[other.index]
                 hint = (
@@ -319,12 +379,13 @@ class _Validator:
                 for hb, fb in prints.get():
                     if ha.index == hb.index:
                         continue
-                    shared = fa.interferes(fb)
+                    shared = interference(fa, fb)
                     if shared is not None:
                         other = self.plan.steps[ha.index]
                         raise self.fail(
                             hb.index,
-                            f"its {hb.point} is only {_t(now - then)} after the {ha.point} of "
+                            f"its {hb.point} is only {plan_time(now - then)} after the "
+                            f"{ha.point} of "
                             f"step {ha.index + 1} {other.text} and both touch {shared} "
                             f"(happenings that interfere must be {self.epsilon:g} apart)",
                             shared,
@@ -332,17 +393,12 @@ class _Validator:
                         )
         recent.append((now, prints))
 
-    def _check_duration(self, h: Happening, state: State) -> None:
+    def _check_duration(self, h: Happening, state: WorkingState) -> None:
         action = h.bound.action
         if not isinstance(action, DurativeAction) or h.duration is None:
             return
         for constraint in action.duration:
-            try:
-                value = self.ev.value(constraint.value, state, h.bindings)
-            except PlansysBridgeError as exc:
-                raise self.fail(
-                    h.index, f"duration cannot be evaluated: {exc}", None, h.time
-                ) from exc
+            value = self._duration_bound(h, constraint, state)
             tol = self.duration_tolerance
             ok = {
                 "=": abs(h.duration - value) <= tol,
@@ -358,16 +414,34 @@ class _Validator:
                     h.time,
                 )
 
+    def _duration_bound(
+        self, h: Happening, constraint: DurationConstraint, state: WorkingState
+    ) -> float:
+        """The value a step's duration is compared with; one made of numbers only is
+        worked out once per action."""
+        known = self._constant_durations.get(id(constraint))
+        if known is not None:
+            return known
+        try:
+            value = self.ev.value(constraint.value, state.state(), h.bindings)
+        except PlansysBridgeError as exc:
+            raise self.fail(h.index, f"duration cannot be evaluated: {exc}", None, h.time) from exc
+        if all(isinstance(n, Number | BinaryOp | Negate) for n in iter_nodes(constraint.value)):
+            self._constant_durations[id(constraint)] = value
+        return value
+
     def _check(
         self,
         h: Happening,
         cond: Condition,
         when: str,
-        state: State,
+        now: WorkingState,
         time: float | None = None,
+        parts: GroundParts | None = None,
     ) -> None:
-        if self.footprints.holds(cond, h.bindings, state):
+        if parts is not None and parts.literals and parts.holds(now):
             return  # a conjunction of literals, looked up directly
+        state = now.state()
         try:
             if self.ev.holds(cond, state, h.bindings, h.duration):
                 return
@@ -379,9 +453,9 @@ class _Validator:
                 None,
                 time if time is not None else h.time,
             ) from exc
-        text = _describe(substitute_condition(failing, h.bindings), state, self.ev, h.duration)
+        text = describe(substitute_condition(failing, h.bindings), state, self.ev, h.duration)
         moment = time if time is not None else h.time
-        suffix = f" at {_t(moment)}" if when.startswith("over all") else ""
+        suffix = f" at {plan_time(moment)}" if when.startswith("over all") else ""
         raise self.fail(h.index, f"{when} {text} is false{suffix}", text, moment)
 
     def _first_false(
@@ -405,35 +479,10 @@ class _Validator:
             failing = self._first_false(goal, state, None)
         except PlansysBridgeError as exc:
             raise self.fail(None, f"the goal cannot be evaluated: {exc}") from exc
-        text = _describe(failing, state, self.ev, None)
+        text = describe(failing, state, self.ev, None)
         raise self.fail(
             None,
             f"the goal is not reached: {text} is false at the end of the plan",
             text,
             self.plan.makespan,
         )
-
-
-def _describe(cond: Condition, state: State, ev: Evaluator, duration: float | None) -> str:
-    text = _condition_text(cond)
-    if isinstance(cond, Compare):
-        try:
-            left = ev.value(cond.left, state, {}, duration)
-            right = ev.value(cond.right, state, {}, duration)
-        except PlansysBridgeError:
-            return text
-        return f"{text} [{left:g} {cond.op} {right:g}]"
-    return text
-
-
-def _condition_text(cond: Condition) -> str:
-    try:
-        from plansys_bridge.pddl.writer import write_condition
-    except ImportError:
-        return str(cond) if isinstance(cond, Atom) else repr(cond)
-    return write_condition(cond)
-
-
-def _t(time: float) -> str:
-    """A plan time as plan files print it, without trailing zeros: ``5.0005``, ``10``."""
-    return f"{time:.6f}".rstrip("0").rstrip(".")
