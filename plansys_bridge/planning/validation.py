@@ -28,7 +28,6 @@ way from knowledge to plan.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import replace
 
@@ -37,9 +36,7 @@ from plansys_bridge.knowledge.evaluation import Evaluator
 from plansys_bridge.knowledge.grounding import substitute_condition
 from plansys_bridge.knowledge.state import State
 from plansys_bridge.pddl.model import (
-    NO_EFFECT,
     And,
-    AnyAction,
     BinaryOp,
     Condition,
     Domain,
@@ -50,15 +47,14 @@ from plansys_bridge.pddl.model import (
     Problem,
 )
 from plansys_bridge.pddl.walkers import iter_nodes
-from plansys_bridge.planning.happenings import SAME_TIME, BoundStep, Happening, simultaneous
+from plansys_bridge.planning.happenings import SAME_TIME, Happening, simultaneous
 from plansys_bridge.planning.mutex import (
-    CompiledParts,
     Footprint,
     Footprints,
     GroundParts,
     interference,
 )
-from plansys_bridge.planning.plan import Plan, PlanStep
+from plansys_bridge.planning.plan import Plan
 from plansys_bridge.planning.validation_report import (
     ValidationReport,
     describe,
@@ -66,11 +62,9 @@ from plansys_bridge.planning.validation_report import (
     plan_time,
 )
 from plansys_bridge.planning.validation_state import WorkingState
+from plansys_bridge.planning.validation_steps import StepProblem, Timeline
 
 __all__ = ["DEFAULT_EPSILON", "ValidationReport", "initial_state", "validate_plan"]
-
-_ActionParts = tuple[CompiledParts | None, CompiledParts | None, CompiledParts | None]
-"""(start, end or instant, over all) of one action, for :meth:`CompiledParts.ground`."""
 
 DEFAULT_EPSILON = 0.001
 _SLACK = 1e-6
@@ -139,13 +133,10 @@ class _Validator:
         self.plan = plan
         self.ev = Evaluator(domain)
         self.footprints = Footprints(self.ev)
-        self._over_all: dict[int, GroundParts | None] = {}
-        """Each durative step's over-all condition with its arguments in place."""
         self._constant_durations: dict[int, float] = {}
-        self._compiled: dict[int, _ActionParts] = {}
-        self._typed: dict[tuple[str, tuple[str, ...]], bool] = {}
         self.state = state if state is not None else initial_state(domain, problem)
-        self._objects = dict(self.state.objects)
+        self.timeline = Timeline(self.ev, self.footprints, self.state)
+        self._over_all = self.timeline.over_all
         self.epsilon = epsilon
         self.duration_tolerance = duration_tolerance
 
@@ -177,7 +168,10 @@ class _Validator:
     # ------------------------------------------------------------ the simulation
 
     def run(self) -> ValidationReport:
-        happenings = self._happenings()
+        try:
+            happenings = self.timeline.happenings(self.plan.steps)
+        except StepProblem as exc:
+            raise self.fail(exc.index, exc.message) from exc
         now = WorkingState(self.state)
         open_steps: dict[int, Happening] = {}
         recent: list[tuple[float, _Prints]] = []
@@ -194,65 +188,6 @@ class _Validator:
             final_state=state,
         )
 
-    def _happenings(self) -> list[Happening]:
-        out: list[Happening] = []
-        for i, step in enumerate(self.plan.steps):
-            if not math.isfinite(step.time) or step.time < 0:
-                raise self.fail(i, f"start time {step.time} is not a time >= 0")
-            action, bindings = self._bind(i, step)
-            g = BoundStep(action, bindings)
-            compiled = self._compiled.get(id(action))
-            if compiled is None:
-                compiled = self._compiled[id(action)] = self._compile(action, tuple(bindings))
-            values = tuple(bindings.values())
-            start, end, over_all = (
-                None if c is None else c.ground(values, bindings) for c in compiled
-            )
-            if isinstance(action, DurativeAction):
-                if not math.isfinite(step.duration) or step.duration < 0:
-                    raise self.fail(i, f"duration {step.duration} is not a duration >= 0")
-                self._over_all[i] = over_all
-                out.append(Happening(step.time, i, "start", g, step.duration, start))
-                out.append(Happening(step.time + step.duration, i, "end", g, step.duration, end))
-            else:
-                out.append(Happening(step.time, i, "instant", g, None, end))
-        out.sort(key=Happening.sort_key)
-        return out
-
-    def _compile(self, action: AnyAction, names: tuple[str, ...]) -> _ActionParts:
-        """What grounds an action's start, end (or instant) and over-all parts."""
-        compiled = self.footprints.compiled
-        if isinstance(action, DurativeAction):
-            return (
-                compiled(action.at_start, action.start_effect, names),
-                compiled(action.at_end, action.end_effect, names),
-                compiled(action.over_all, NO_EFFECT, names),
-            )
-        return (None, compiled(action.precondition, action.effect, names), None)
-
-    def _bind(self, index: int, step: PlanStep) -> tuple[AnyAction, dict[str, str]]:
-        """The step's action and bindings; its arguments must be objects of the
-        parameters' types (each object and type checked once per validation)."""
-        try:
-            action, bindings = self.ev.bind(step.action, step.arguments)
-        except PlansysBridgeError as exc:
-            raise self.fail(index, str(exc)) from exc
-        typed = self._typed
-        for param, arg in zip(action.parameters, bindings.values(), strict=True):
-            key = (arg, param.types)
-            ok = typed.get(key)
-            if ok is None:
-                kind = self._objects.get(arg)
-                ok = typed[key] = kind is not None and self.ev.types.is_subtype_of_any(
-                    (kind,), param.types
-                )
-            if not ok:
-                try:  # the evaluator's own words for what is wrong
-                    self.ev.bind(step.action, step.arguments, self.state)
-                except PlansysBridgeError as exc:
-                    raise self.fail(index, str(exc)) from exc
-        return action, bindings
-
     def _group(
         self,
         group: list[Happening],
@@ -265,11 +200,15 @@ class _Validator:
         for h in group:
             if h.point == "start":
                 self._check_duration(h, state)
+            parts = h.parts
+            if parts is not None and parts.literals and parts.holds(state):
+                continue  # a conjunction of literals, looked up directly
             try:
-                self._check(h, h.condition, h.when, state, parts=h.parts)
+                self._check(h, h.condition, h.when, state)
             except _Invalid as exc:
                 raise self._explain_simultaneous(exc, h, prints.get()) from None
-        pairs = prints.get() if len({h.index for h in group}) > 1 else []
+        several = len(group) > 1 and len({h.index for h in group}) > 1
+        pairs = prints.get() if several else []
         for a in range(len(pairs)):
             for b in range(a + 1, len(pairs)):
                 ha, fa = pairs[a]
@@ -288,20 +227,24 @@ class _Validator:
                     )
         self._check_separation(now, prints, recent)
         changed = self._apply(group, state, now)
-        started = set()
+        check: list[int] = []
         for h in group:
             if h.point == "start":
                 open_steps[h.index] = h
-                started.add(h.index)
+                check.append(h.index)
             elif h.point == "end":
                 open_steps.pop(h.index, None)
-        for index in sorted(open_steps):
+        if changed:
+            for index, h in open_steps.items():
+                if index not in check and self._touched(h, changed):
+                    check.append(index)
+        for index in sorted(check):
             h = open_steps[index]
-            end = h.time + (h.duration or 0.0)
-            if end - now > SAME_TIME and (index in started or self._touched(h, changed)):
-                self._check(
-                    h, h.bound.over_all, "over all condition", state, now, self._over_all.get(index)
-                )
+            if h.time + (h.duration or 0.0) - now <= SAME_TIME:
+                continue
+            parts = self._over_all.get(index)
+            if parts is None or not parts.literals or not parts.holds(state):
+                self._check(h, h.bound.over_all, "over all condition", state, now)
 
     def _apply(self, group: list[Happening], state: WorkingState, now: float) -> set[object]:
         """Apply the group's effects to ``state``; every atom (as ``(predicate,
@@ -437,10 +380,9 @@ class _Validator:
         when: str,
         now: WorkingState,
         time: float | None = None,
-        parts: GroundParts | None = None,
     ) -> None:
-        if parts is not None and parts.literals and parts.holds(now):
-            return  # a conjunction of literals, looked up directly
+        """Raise naming the failing part unless ``cond`` holds (the evaluator's way:
+        plain conjunctions of literals are looked up before coming here)."""
         state = now.state()
         try:
             if self.ev.holds(cond, state, h.bindings, h.duration):
