@@ -65,7 +65,7 @@ from cyclonedds.topic import Topic
 from plansys_bridge.clock import VirtualTimeEventLoop
 from plansys_bridge.errors import HubError
 from plansys_bridge.hub.dds_checks import SampleCheck, check_sample
-from plansys_bridge.hub.dds_codec import ROUTES, Channel, Route, wire_sources
+from plansys_bridge.hub.dds_codec import ROUTES, Channel, Route, check_accepts
 from plansys_bridge.hub.dds_config import check_domain_id, loopback_config
 from plansys_bridge.hub.dds_discovery import publish_discovery_info
 from plansys_bridge.hub.dds_participant import DdsParticipant, endpoint_qos
@@ -85,9 +85,9 @@ _TAKE_BATCH = 64
 _ANY_SAMPLE = SampleState.Any | ViewState.Any | InstanceState.Any
 
 
-def _write(endpoint: _Endpoint, sample: Any) -> None:
-    """Write ``sample`` as XCDR1 bytes (what ``DataWriter.write`` does, faster)."""
-    ret = ddspy_write(endpoint.writer._ref, endpoint.channel.write(sample))
+def _write(endpoint: _Endpoint, data: bytes) -> None:
+    """Write a sample's XCDR1 bytes (what ``DataWriter.write`` does, faster)."""
+    ret = ddspy_write(endpoint.writer._ref, data)
     if ret < 0:
         raise DDSException(ret, f"writing on {endpoint.channel.dds_topic}")
 
@@ -260,15 +260,16 @@ class DdsTransport:
         if route is None:
             self._publish_local(topic, msg)
             return
-        plain, wrapped = wire_sources(topic, msg)
+        check_accepts(route, msg)
+        plain, wrapped = route.to_bytes
         plain_ep, project_ep = self._writers[topic]
         try:
             if wrapped is not None and project_ep is not None:
-                _write(project_ep, wrapped)
+                _write(project_ep, wrapped(msg))
                 if self._plain_needed(route):
-                    _write(plain_ep, plain)
+                    _write(plain_ep, plain(msg))
             else:
-                _write(plain_ep, plain)
+                _write(plain_ep, plain(msg))
         except (DDSException, ValueError, TypeError, OverflowError) as exc:
             raise HubError(
                 f"cannot publish {type(msg).__name__} on {route.plain.dds_topic}: {exc}"

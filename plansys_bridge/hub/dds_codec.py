@@ -42,6 +42,7 @@ from plansys_bridge.hub.dds_convert import (
     to_idl_duration,
     to_idl_time,
 )
+from plansys_bridge.hub.dds_execution import execution_reader, execution_writer
 from plansys_bridge.hub.dds_qos import TOPIC_QOS, TopicQos
 from plansys_bridge.hub.dds_wire import hub_reader, wire_codec
 from plansys_bridge.interfaces.dds import dds_type
@@ -51,6 +52,7 @@ __all__ = [
     "ROUTES",
     "Channel",
     "Route",
+    "check_accepts",
     "dds_topic_name",
     "decode",
     "encode",
@@ -187,12 +189,14 @@ class Channel:
     @cached_property
     def read(self) -> Callable[[bytes], object]:
         """The sample's bytes (with their encapsulation header) -> the hub message."""
+        decoded = self.decode
+        cls = self.idl_type
+        if self.ros_type in (ACTION_EXECUTION, BRIDGE_ACTION_EXECUTION):
+            return execution_reader(self.ros_type, lambda data: decoded(cls.deserialize(data)))
         hub, finish = _HUB_FORMS[self.ros_type]
         fast = hub_reader(self.ros_type, hub, self.decode)
         if finish is None:
             return fast
-        decoded = self.decode
-        cls = self.idl_type
 
         def read(data: bytes) -> object:
             if data[:2] != b"\x00\x01":
@@ -224,6 +228,22 @@ class Route:
     @property
     def channels(self) -> tuple[Channel, ...]:
         return (self.plain,) if self.project is None else (self.plain, self.project)
+
+    @cached_property
+    def to_bytes(self) -> tuple[Callable[[Any], bytes], Callable[[Any], bytes] | None]:
+        """hub message -> the bytes of its plain sample, and of its wrapper sample if
+        the topic has one (what :attr:`Channel.write` makes of :func:`wire_sources`)."""
+        if self.hub_topic == hm.Topics.ACTIONS_HUB:
+            return execution_writer(ACTION_EXECUTION), execution_writer(BRIDGE_ACTION_EXECUTION)
+        split = _SOURCES.get(self.hub_topic)
+        plain = self.plain.write
+        if split is None:
+            return plain, None
+        project = self.project.write if self.project is not None else None
+        return (
+            lambda m: plain(split(m)[0]),
+            None if project is None else lambda m: project(split(m)[1]),
+        )
 
 
 def _route(
@@ -333,12 +353,18 @@ def _accepting(hub_topic: str, msg: object) -> Route:
     route = ROUTES.get(hub_topic)
     if route is None:
         raise HubError(f"topic {hub_topic!r} has no DDS type (known: {', '.join(ROUTES)})")
+    check_accepts(route, msg)
+    return route
+
+
+def check_accepts(route: Route, msg: object) -> None:
+    """HubError unless ``route`` carries messages of ``msg``'s type."""
     if not isinstance(msg, route.accepts):
         wanted = " or ".join(t.__name__ for t in route.accepts)
         raise HubError(
-            f"cannot publish {type(msg).__name__} on {hub_topic!r} over DDS: expected {wanted}"
+            f"cannot publish {type(msg).__name__} on {route.hub_topic!r} over DDS: "
+            f"expected {wanted}"
         )
-    return route
 
 
 def decode(channel: Channel, sample: Any) -> object:

@@ -25,6 +25,7 @@ import struct
 import threading
 import typing
 from collections.abc import Callable
+from functools import lru_cache
 from typing import Any
 
 from plansys_bridge.hub.dds_convert import split_seconds
@@ -32,7 +33,14 @@ from plansys_bridge.interfaces.convert import DURATION, TIME
 from plansys_bridge.interfaces.dds import dds_type
 from plansys_bridge.interfaces.typestore import Nodetype, ros2_fielddefs
 
-__all__ = ["XCDR1_LE", "WireCodec", "hub_reader", "wire_codec"]
+__all__ = [
+    "XCDR1_LE",
+    "WireCodec",
+    "hub_reader",
+    "string_bytes",
+    "strings_bytes",
+    "wire_codec",
+]
 
 XCDR1_LE = b"\x00\x01"
 """The encapsulation identifier of plain CDR, little-endian (what ROS 2 nodes write)."""
@@ -54,6 +62,30 @@ _FORMATS: dict[str, str] = {
 }
 _ZEROS = tuple(bytes(n) for n in range(8))
 _STAMPS = {TIME: "stamp", DURATION: "duration"}
+_U32 = struct.Struct("<I")
+
+
+@lru_cache(maxsize=4096)
+def string_bytes(text: str) -> bytes:
+    """An unbounded string as XCDR1 writes it (length with the NUL, UTF-8, NUL).
+
+    Kept per text: the hub writes the same node names, actions and arguments over
+    and over (an auction among 200 bidders writes one action 400 times), and
+    encoding each string was most of an encode.
+    """
+    data = text.encode()
+    return _U32.pack(len(data) + 1) + data + b"\x00"
+
+
+@lru_cache(maxsize=4096)
+def strings_bytes(items: tuple[str | None, ...]) -> bytes:
+    """An unbounded sequence of unbounded strings, from a 4-aligned offset (where
+    its length goes): the padding inside depends on nothing before it."""
+    out = bytearray(_U32.pack(len(items)))
+    for item in items:
+        out += _ZEROS[-len(out) & 3]
+        out += string_bytes("" if item is None else item)
+    return bytes(out)
 
 
 class WireCodec:
@@ -71,7 +103,7 @@ class WireCodec:
     def encode(self, sample: Any) -> bytes:
         try:
             return self._encode(sample)
-        except (struct.error, OverflowError, ValueError, AttributeError) as exc:
+        except (struct.error, OverflowError, ValueError, AttributeError, TypeError) as exc:
             raise ValueError(f"{self.ros_type}: {exc}") from exc
 
     def decode(self, data: bytes) -> Any:
@@ -127,7 +159,12 @@ class _Source:
 
     def __init__(self) -> None:
         self.lines: list[str] = []
-        self.env: dict[str, Any] = {"_Z": _ZEROS, "_U32": struct.Struct("<I")}
+        self.env: dict[str, Any] = {
+            "_Z": _ZEROS,
+            "_U32": _U32,
+            "_STR": string_bytes,
+            "_STRS": strings_bytes,
+        }
         self._n = 0
 
     def name(self, stem: str) -> str:
@@ -199,6 +236,10 @@ def _encode_value(src: _Source, desc: tuple[Any, Any], var: str, indent: int) ->
         base, bound = detail
         src.add(indent, f"if {var} is None:")
         src.add(indent + 1, f"{var} = {_zero(base)}")
+        if base == "string" and not bound:
+            _align(src, indent, 4, decoding=False)
+            src.add(indent, f"buf += _STR({var})")
+            return
         if base == "string":
             text = src.name("t")
             src.add(indent, f"{text} = {var}.encode()")
@@ -236,6 +277,13 @@ def _encode_value(src: _Source, desc: tuple[Any, Any], var: str, indent: int) ->
     element, size = detail
     src.add(indent, f"if {var} is None:")
     src.add(indent + 1, f"{var} = ()")
+    if kind != Nodetype.ARRAY and element[0] == Nodetype.BASE and element[1] == ("string", 0):
+        if size:
+            src.add(indent, f"if len({var}) > {size}:")
+            src.add(indent + 1, f"raise ValueError('sequence longer than its bound {size}')")
+        _align(src, indent, 4, decoding=False)
+        src.add(indent, f"buf += _STRS({var} if type({var}) is tuple else tuple({var}))")
+        return
     if kind == Nodetype.ARRAY:
         src.add(indent, f"if len({var}) != {size}:")
         src.add(indent + 1, f"raise ValueError(f'array of {size} items has {{len({var})}}')")

@@ -116,8 +116,17 @@ class BridgeActionExecution:
 
     @classmethod
     def of(cls, msg: ActionExecution) -> BridgeActionExecution:
-        bid = msg.bid if msg.bid is not None else 0.0
-        return cls(msg, msg.request_id, msg.bid is not None, float(bid))
+        """The wrapper of ``msg`` (made as :func:`action_execution` makes a message:
+        every message on ``actions_hub`` over DDS is wrapped on its way out)."""
+        bid = msg.bid
+        wrapped = _new(cls)
+        wrapped.__dict__.update(
+            execution=msg,
+            request_id=msg.request_id,
+            has_bid=bid is not None,
+            bid=0.0 if bid is None else float(bid),
+        )
+        return wrapped
 
 
 @dataclass(frozen=True)
