@@ -69,6 +69,7 @@ from plansys_bridge.hub.dds_codec import ROUTES, Channel, Route, check_accepts
 from plansys_bridge.hub.dds_config import check_domain_id, loopback_config
 from plansys_bridge.hub.dds_discovery import publish_discovery_info
 from plansys_bridge.hub.dds_participant import DdsParticipant, endpoint_qos
+from plansys_bridge.hub.local_interest import LocalInterest, Wants
 from plansys_bridge.hub.messages import Topics
 from plansys_bridge.hub.transport import InProcessTransport, Subscription
 
@@ -156,6 +157,7 @@ class DdsTransport:
         self._check: SampleCheck = check if check is not None else check_sample
         """What a received message must pass (:mod:`~plansys_bridge.hub.dds_checks`)."""
         self._fanout = InProcessTransport()
+        self._interest = LocalInterest()
         """Local fan-out to this process's subscribers, on the loop, in arrival order."""
         self._endpoints: list[_Endpoint] = []
         self._writers: dict[str, tuple[_Endpoint, _Endpoint | None]] = {}
@@ -244,9 +246,17 @@ class DdsTransport:
 
     # -- publish / subscribe -----------------------------------------------------------
     def subscribe(self, topic: str, callback: Callback) -> Subscription:
+        return self.subscribe_wanting(topic, callback, None)
+
+    def subscribe_wanting(
+        self, topic: str, callback: Callback, wants: Wants | None
+    ) -> Subscription:
+        """As :meth:`subscribe`, for a subscriber that says which messages it wants: a
+        message published here reaches this process's subscribers only if one of them
+        wants it (see :mod:`~plansys_bridge.hub.local_interest`)."""
         if self._closed:
             raise HubError(f"cannot subscribe to {topic!r}: transport closed")
-        return self._fanout.subscribe(topic, callback)
+        return self._interest.track(topic, self._fanout.subscribe(topic, callback), wants)
 
     def subscriber_count(self, topic: str) -> int:
         return self._fanout.subscriber_count(topic)
@@ -275,7 +285,8 @@ class DdsTransport:
                 f"cannot publish {type(msg).__name__} on {route.plain.dds_topic}: {exc}"
             ) from exc
         self.published += 1
-        self._fanout.publish(topic, msg)
+        if self._interest.wanted(topic, msg):
+            self._fanout.publish(topic, msg)
 
     def _plain_needed(self, route: Route) -> bool:
         """Must the plain copy of a wrapped message be written too?

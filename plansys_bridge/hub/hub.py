@@ -49,7 +49,14 @@ class Hub:
         router = self._routers.get(topic)
         if router is None:
             router = TopicRouter(topic)
-            router.transport_subscription = self.transport.subscribe(topic, router.dispatch)
+            # A transport that can skip delivering its own messages nobody here wants
+            # (DDS) is told what the router wants.
+            subscribe_wanting = getattr(self.transport, "subscribe_wanting", None)
+            router.transport_subscription = (
+                subscribe_wanting(topic, router.dispatch, router.wants)
+                if subscribe_wanting is not None
+                else self.transport.subscribe(topic, router.dispatch)
+            )
             self._routers[topic] = router
         return router.add(callback, keys)
 

@@ -140,6 +140,15 @@ class TopicRouter:
     def __len__(self) -> int:
         return len(self._everyone) + len(self._all_keyed)
 
+    def wants(self, msg: object) -> bool:
+        """Would :meth:`dispatch` deliver ``msg`` to anybody now?"""
+        if self._everyone:
+            return True
+        key = self._router(msg) if self._router is not None else None
+        if key is None:
+            return bool(self._all_keyed)
+        return key in self._keyed
+
     def dispatch(self, msg: object) -> None:
         """Deliver ``msg`` (called by the transport on the loop)."""
         everyone = self._everyone
