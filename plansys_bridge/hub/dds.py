@@ -361,32 +361,34 @@ class DdsTransport:
         """On the reader thread: take what arrived, hand it to the loop in one batch."""
         batch: list[tuple[str, object]] = []
         for ep in self._endpoints:
-            topic = ep.route.hub_topic
-            batch += ((topic, msg) for msg in self._take(ep))
+            self._take(ep, batch)
         if batch:
             self._fanout.publish_batch(batch)
 
-    def _take(self, ep: _Endpoint) -> list[object]:
-        batch: list[object] = []
+    def _take(self, ep: _Endpoint, batch: list[tuple[str, object]]) -> None:
+        """Append ``(hub topic, message)`` for each sample ``ep`` has, in order."""
         skip_marked = not ep.channel.project and ep.route.project is not None
+        topic = ep.route.hub_topic
+        read = ep.channel.read
+        check = self._check
         while True:
             samples = ddspy_take(ep.reader._ref, _ANY_SAMPLE, _TAKE_BATCH)
             if isinstance(samples, int):  # pragma: no cover - a reader deleted under us
                 raise HubError(f"{ep.channel.dds_topic}: take failed ({samples})")
             if not samples:
-                return batch
+                return
             for data, info in samples:
                 if not info.valid_data:
                     continue
                 if skip_marked and self._from_project(ep, info.publication_handle):
                     continue
                 try:
-                    msg = ep.channel.read(data)
-                    reason = self._check(ep.route.hub_topic, msg)
+                    msg = read(data)
+                    reason = check(topic, msg)
                 except Exception as exc:  # a foreign writer's malformed sample
                     reason = str(exc)
                 if reason is None:
-                    batch.append(msg)
+                    batch.append((topic, msg))
                     continue
                 self.dropped += 1
                 log.warning(
