@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Literal, NamedTuple
 
 from plansys_bridge.pddl.model import (
     NO_EFFECT,
@@ -33,11 +33,10 @@ SAME_TIME = 1e-6
 Point = Literal["start", "end", "instant"]
 
 
-@dataclass(frozen=True)
-class BoundStep:
+class BoundStep(NamedTuple):
     """A plan step's action with its bindings, its parts as the validator sees them: a
     plain ``:action`` is one instant whose precondition is checked and whose effect
-    applies then."""
+    applies then. (A named tuple: one is made per step of every plan validated.)"""
 
     action: AnyAction
     bindings: Mapping[str, str]
@@ -66,7 +65,11 @@ class BoundStep:
         return act.end_effect if isinstance(act, DurativeAction) else act.effect
 
 
-@dataclass
+_ORDER = {"end": 0, "instant": 1, "start": 2}
+"""Ends before starts at one time: an interval closes before the next opens."""
+
+
+@dataclass(slots=True)
 class Happening:
     time: float
     index: int
@@ -102,9 +105,7 @@ class Happening:
         return self.bound.start_effect if self.point == "start" else self.bound.end_effect
 
     def sort_key(self) -> tuple[float, int, int]:
-        # ends before starts at one time: an interval closes before the next opens
-        order = {"end": 0, "instant": 1, "start": 2}[self.point]
-        return (self.time, order, self.index)
+        return (self.time, _ORDER[self.point], self.index)
 
 
 def simultaneous(happenings: list[Happening]) -> Iterator[list[Happening]]:

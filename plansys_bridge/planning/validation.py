@@ -137,6 +137,8 @@ class _Validator:
         self.state = state if state is not None else initial_state(domain, problem)
         self.timeline = Timeline(self.ev, self.footprints, self.state)
         self._over_all = self.timeline.over_all
+        self._over_all_reads: dict[int, set[tuple[str, tuple[str, ...]]] | None] = {}
+        """What each open step's over-all condition reads (None: depends on the state)."""
         self.epsilon = epsilon
         self.duration_tolerance = duration_tolerance
 
@@ -228,16 +230,23 @@ class _Validator:
         self._check_separation(now, prints, recent)
         changed = self._apply(group, state, now)
         check: list[int] = []
+        reads = self._over_all_reads
         for h in group:
             if h.point == "start":
                 open_steps[h.index] = h
                 check.append(h.index)
+                parts = self._over_all.get(h.index)
+                reads[h.index] = None if parts is None else parts.reads()
             elif h.point == "end":
                 open_steps.pop(h.index, None)
         if changed:
-            for index, h in open_steps.items():
-                if index not in check and self._touched(h, changed):
-                    check.append(index)
+            # An over-all condition held after its start and at every change since;
+            # changes to nothing it reads leave it true.
+            for index in open_steps:
+                if index not in check:
+                    read = reads[index]
+                    if read is None or not changed.isdisjoint(read):
+                        check.append(index)
         for index in sorted(check):
             h = open_steps[index]
             if h.time + (h.duration or 0.0) - now <= SAME_TIME:
@@ -274,17 +283,6 @@ class _Validator:
             changed.update([(a.predicate, a.args) for a in deletes])
             changed.update(values)
         return changed
-
-    def _touched(self, h: Happening, changed: set[object]) -> bool:
-        """Could the changes of this group have made ``h``'s over-all condition false?
-
-        It held after its start and at every later change; what does not change what
-        it reads leaves it true.
-        """
-        if not changed:
-            return False
-        parts = self._over_all.get(h.index)
-        return parts is None or not changed.isdisjoint(parts.reads())
 
     def _explain_simultaneous(
         self,
@@ -343,11 +341,13 @@ class _Validator:
         for constraint in action.duration:
             value = self._duration_bound(h, constraint, state)
             tol = self.duration_tolerance
-            ok = {
-                "=": abs(h.duration - value) <= tol,
-                "<=": h.duration <= value + tol,
-                ">=": h.duration >= value - tol,
-            }[constraint.op]
+            op = constraint.op
+            if op == "=":
+                ok = abs(h.duration - value) <= tol
+            elif op == "<=":
+                ok = h.duration <= value + tol
+            else:
+                ok = h.duration >= value - tol
             if not ok:
                 text = f"(?duration {constraint.op} {value:g})"
                 raise self.fail(

@@ -64,13 +64,13 @@ class Timeline:
             if compiled is None:
                 compiled = self._compiled[id(action)] = self._compile(action, tuple(bindings))
             values = tuple(bindings.values())
-            start, end, over_all = (
-                None if c is None else c.ground(values, bindings) for c in compiled
-            )
+            at_start, at_end, during = compiled
+            end = None if at_end is None else at_end.ground(values, bindings)
             if isinstance(action, DurativeAction):
                 if not math.isfinite(step.duration) or step.duration < 0:
                     raise StepProblem(i, f"duration {step.duration} is not a duration >= 0")
-                self.over_all[i] = over_all
+                self.over_all[i] = None if during is None else during.ground(values, bindings)
+                start = None if at_start is None else at_start.ground(values, bindings)
                 out.append(Happening(step.time, i, "start", g, step.duration, start))
                 out.append(Happening(step.time + step.duration, i, "end", g, step.duration, end))
             else:
