@@ -1,16 +1,14 @@
-"""The py_trees behaviours one plan action is made of.
+"""The py_trees behaviours templates build an action's subtree from.
 
-Each action of a plan becomes (see :mod:`plansys_bridge.execution.tree_builder`)::
+Each drives one :mod:`~plansys_bridge.execution.phases` phase (the logic lives
+there, shared with the one-behaviour standard action of
+:mod:`~plansys_bridge.execution.standard_action`). The standard subtree
+(:meth:`ActionNodes.default <plansys_bridge.execution.tree_builder.ActionNodes.default>`) is::
 
     WaitForPredecessors(start) -> WaitAtStartReq -> ApplyAtStartEffect
       -> ReactiveSequence[CheckTimeout?, CheckOverAllReq, ExecuteAction]
       -> WaitForPredecessors(end) -> CheckAtEndReq -> ApplyAtEndEffect
 
-Behaviours never poll on a timer of their own: whatever can change their answer
-(a performer's FINISH, a knowledge change, a deadline they registered with
-:meth:`PlanContext.schedule`) wakes the executor, which ticks the tree again.
-Behaviours read the knowledge through snapshots and change it only through
-``ProblemExpert.apply`` (atomic), so the knowledge never holds half an effect.
 The state they share lives in :mod:`plansys_bridge.execution.plan_context`.
 """
 
@@ -21,10 +19,20 @@ import asyncio
 import py_trees
 from py_trees.common import Status
 
-from plansys_bridge.errors import PlansysBridgeError
+from plansys_bridge.execution.phases import (
+    AtEndEffectPhase,
+    AtEndReqPhase,
+    AtStartEffectPhase,
+    AtStartReqPhase,
+    ExecutePhase,
+    OverAllReqPhase,
+    OverrunPhase,
+    Phase,
+    PredecessorsPhase,
+)
 from plansys_bridge.execution.plan_context import ActionRuntime, EffectDelta, PlanContext
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome
-from plansys_bridge.planning.orderings import GROUND, START, Point
+from plansys_bridge.planning.orderings import START, Point
 
 __all__ = [
     "ActionBehaviour",
@@ -44,245 +52,104 @@ __all__ = [
 
 
 class ActionBehaviour(py_trees.behaviour.Behaviour):
-    """Base of the standard behaviours: one action's run-time state and the plan's
-    context; errors raised by the knowledge fail the action with their message."""
+    """A py_trees behaviour running one phase of an action: entered on
+    ``initialise``, stepped on ``update``, halted when stopped while RUNNING."""
 
-    label = "Action"
-
-    def __init__(self, ctx: PlanContext, rt: ActionRuntime, name: str | None = None) -> None:
-        super().__init__(name or f"{self.label} {rt.text}:{rt.index}")
-        self.ctx = ctx
+    def __init__(self, phase: Phase, name: str | None = None) -> None:
+        rt = phase.rt
+        super().__init__(name or f"{phase.label} {rt.text}:{rt.index}")
+        self.phase = phase
+        self.ctx = phase.ctx
         self.rt = rt
 
+    def initialise(self) -> None:
+        self.phase.initialise()
+
     def update(self) -> Status:
-        try:
-            return self.step()
-        except PlansysBridgeError as exc:
-            self.rt.reason = f"{self.label}: {exc}"
-            return Status.FAILURE
+        return self.phase.run()
 
-    def step(self) -> Status:  # pragma: no cover - every subclass implements it
-        raise NotImplementedError
-
-    def fail(self, reason: str) -> Status:
-        self.rt.reason = reason
-        return Status.FAILURE
+    def terminate(self, new_status: Status) -> None:
+        if new_status == Status.INVALID:
+            self.phase.halt()
 
 
 class WaitForPredecessors(ActionBehaviour):
-    """Wait until every happening this action's ``point`` depends on took place.
-
-    ``point="start"``: before the action starts (PlanSys2's WAIT_PREV_ACTIONS);
-    ``point="end"``: before its at-end effects (PlanSys2's CHECK_PREV_ACTIONS).
-    Fails when a predecessor stopped without reaching that happening, and (for the
-    start) once the plan is stopping, so nothing new starts after a failure.
-    """
-
-    label = "WaitForPredecessors"
+    """See :class:`~plansys_bridge.execution.phases.PredecessorsPhase`."""
 
     def __init__(self, ctx: PlanContext, rt: ActionRuntime, point: Point = START) -> None:
+        phase = PredecessorsPhase(ctx, rt, point)
+        super().__init__(phase, f"{phase.label}({point}) {rt.text}:{rt.index}")
         self.point: Point = point
-        self.waits = ctx.graph.waits(rt.index, point)
-        super().__init__(ctx, rt, f"{self.label}({point}) {rt.text}:{rt.index}")
-        self._next = 0
-
-    def step(self) -> Status:
-        ctx = self.ctx
-        if self.point == START and (ctx.draining or ctx.cancelled):
-            self.rt.skipped = True
-            return self.fail(
-                "not started: the plan stopped after "
-                + (ctx.failures[0] if ctx.failures else "a cancel")
-            )
-        while self._next < len(self.waits):
-            j, point = self.waits[self._next]
-            if not ctx.reached(j, point):
-                other = ctx.actions[j]
-                if other.finished:
-                    if self.point == START:
-                        self.rt.skipped = True
-                    return self.fail(f"predecessor {other.text} stopped before its {point}")
-                ctx.park(self.rt.index)
-                return Status.RUNNING
-            self._next += 1
-        return Status.SUCCESS
 
 
 class WaitAtStartReq(ActionBehaviour):
-    """Wait for the at-start requirement; fail after ``timeout`` mission seconds
-    (PlanSys2 #218 waits forever). ``timeout=None`` waits forever."""
-
-    label = "WaitAtStartReq"
+    """See :class:`~plansys_bridge.execution.phases.AtStartReqPhase`."""
 
     def __init__(self, ctx: PlanContext, rt: ActionRuntime, timeout: float | None = None) -> None:
-        super().__init__(ctx, rt)
+        self.wait = AtStartReqPhase(ctx, rt, timeout)
+        super().__init__(self.wait)
         self.timeout = timeout
-        self.deadline: float | None = None
 
-    def initialise(self) -> None:
-        if self.timeout is not None:
-            self.deadline = self.ctx.now() + self.timeout
-            self.ctx.schedule(self.deadline)
-
-    def step(self) -> Status:
-        ctx = self.ctx
-        if ctx.draining or ctx.cancelled:
-            self.rt.skipped = True
-            return self.fail("not started: the plan is stopping")
-        if ctx.holds(self.rt, self.rt.ground.at_start):
-            return Status.SUCCESS
-        if self.deadline is not None and ctx.now() >= self.deadline:
-            unmet = ctx.unmet(self.rt, self.rt.ground.at_start)
-            return self.fail(f"at start requirement {unmet} did not hold within {self.timeout:g} s")
-        return Status.RUNNING
+    @property
+    def deadline(self) -> float | None:
+        return self.wait.deadline
 
 
 class ApplyAtStartEffect(ActionBehaviour):
-    """Apply the at-start effects (atomically) and mark the action started."""
+    """See :class:`~plansys_bridge.execution.phases.AtStartEffectPhase`."""
 
-    label = "ApplyAtStartEffect"
-
-    def step(self) -> Status:
-        ctx, rt = self.ctx, self.rt
-        effect = rt.ground.start_effect
-        rt.start_delta = EffectDelta.of(
-            ctx.evaluator, effect, ctx.state(), GROUND, rt.step.duration
-        )
-        if not rt.start_delta.empty:
-            ctx.knowledge.apply(effect, GROUND, rt.step.duration)
-        ctx.action_started(rt)
-        return Status.SUCCESS
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
+        super().__init__(AtStartEffectPhase(ctx, rt))
 
 
 class CheckOverAllReq(ActionBehaviour):
-    """The over-all requirement, re-checked on every tick while the action runs;
-    failing halts the action (its performer gets a CANCEL)."""
+    """See :class:`~plansys_bridge.execution.phases.OverAllReqPhase`."""
 
-    label = "CheckOverAllReq"
-
-    def step(self) -> Status:
-        if self.ctx.holds(self.rt, self.rt.ground.over_all):
-            return Status.SUCCESS
-        unmet = self.ctx.unmet(self.rt, self.rt.ground.over_all)
-        return self.fail(f"over all requirement {unmet} no longer holds")
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
+        super().__init__(OverAllReqPhase(ctx, rt))
 
 
 class ExecuteAction(ActionBehaviour):
-    """Hand the action to a performer through the auction and follow it.
-
-    ``initialise`` starts an :class:`ActionClient` task; its completion wakes the
-    executor, so the next tick sees the outcome at once. Halting this behaviour
-    (over-all violation, timeout, cancel) cancels the client, which sends CANCEL to
-    the performer.
-    """
-
-    label = "ExecuteAction"
+    """See :class:`~plansys_bridge.execution.phases.ExecutePhase`."""
 
     def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
-        super().__init__(ctx, rt)
-        self.client: ActionClient | None = None
-        self.task: asyncio.Task[ActionOutcome] | None = None
+        self.execution = ExecutePhase(ctx, rt)
+        super().__init__(self.execution)
 
-    def initialise(self) -> None:
-        ctx, rt = self.ctx, self.rt
-        self.client = ActionClient(
-            ctx.hub,
-            rt.step.action,
-            rt.step.arguments,
-            request_id=rt.record.request_id,
-            policy=ctx.options.auction,
-        )
-        rt.client = self.client
-        self.task = asyncio.get_running_loop().create_task(
-            self.client.run(
-                lambda c, s: ctx.feedback(rt, c, s),
-                confirm_cb=lambda node: ctx.confirmed(rt, node),
-            ),
-            name=f"execute {rt.record.request_id}",
-        )
-        ctx.track(self.task)
-        self.task.add_done_callback(self._ended)
+    @property
+    def client(self) -> ActionClient | None:
+        return self.execution.client
 
-    def _ended(self, _task: asyncio.Task[ActionOutcome]) -> None:
-        self.ctx.resume(self.rt.index)
-        self.ctx.wake()
-
-    def step(self) -> Status:
-        task = self.task
-        if task is None:
-            return Status.RUNNING
-        if not task.done():
-            self.ctx.rest(self.rt)
-            return Status.RUNNING
-        if task.cancelled():
-            return self.fail("execution task cancelled")
-        exc = task.exception()
-        if exc is not None:
-            return self.fail(f"execution failed: {exc!r}")
-        outcome = task.result()
-        self.ctx.action_executed(self.rt, outcome)
-        if outcome.success:
-            return Status.SUCCESS
-        return self.fail(outcome.status or "performer reported failure")
-
-    def terminate(self, new_status: Status) -> None:
-        if new_status == Status.INVALID and self.task is not None and not self.task.done():
-            assert self.client is not None
-            self.client.cancel()
-            self.rt.record.end = self.ctx.now()
-            self.rt.record.performer = self.client.performer or self.rt.record.performer
+    @property
+    def task(self) -> asyncio.Task[ActionOutcome] | None:
+        return self.execution.task
 
 
 class CheckTimeout(ActionBehaviour):
-    """Fail when the action runs longer than its planned duration plus
-    ``overrun_percentage`` percent (measured from its start)."""
-
-    label = "CheckTimeout"
+    """See :class:`~plansys_bridge.execution.phases.OverrunPhase`."""
 
     def __init__(self, ctx: PlanContext, rt: ActionRuntime, overrun_percentage: float) -> None:
-        super().__init__(ctx, rt)
+        self.overrun = OverrunPhase(ctx, rt, overrun_percentage)
+        super().__init__(self.overrun)
         self.overrun_percentage = overrun_percentage
-        self.deadline: float | None = None
 
-    def initialise(self) -> None:
-        start = self.rt.record.start if self.rt.record.start is not None else self.ctx.now()
-        if self.rt.step.duration > 0:
-            self.deadline = start + self.rt.step.duration * (1.0 + self.overrun_percentage / 100.0)
-            self.ctx.schedule(self.deadline)
-
-    def step(self) -> Status:
-        if self.deadline is not None and self.ctx.now() >= self.deadline:
-            return self.fail(
-                f"overran its planned duration {self.rt.step.duration:g} s "
-                f"by more than {self.overrun_percentage:g} %"
-            )
-        return Status.SUCCESS
+    @property
+    def deadline(self) -> float | None:
+        return self.overrun.deadline
 
 
 class CheckAtEndReq(ActionBehaviour):
-    """The at-end requirement must hold when the action ends."""
+    """See :class:`~plansys_bridge.execution.phases.AtEndReqPhase`."""
 
-    label = "CheckAtEndReq"
-
-    def step(self) -> Status:
-        if self.ctx.holds(self.rt, self.rt.ground.at_end):
-            return Status.SUCCESS
-        return self.fail(
-            f"at end requirement {self.ctx.unmet(self.rt, self.rt.ground.at_end)} does not hold"
-        )
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
+        super().__init__(AtEndReqPhase(ctx, rt))
 
 
 class ApplyAtEndEffect(ActionBehaviour):
-    """Apply the at-end effects (atomically) and mark the action ended."""
+    """See :class:`~plansys_bridge.execution.phases.AtEndEffectPhase`."""
 
-    label = "ApplyAtEndEffect"
-
-    def step(self) -> Status:
-        ctx, rt = self.ctx, self.rt
-        effect = rt.ground.end_effect
-        ctx.knowledge.apply(effect, GROUND, rt.step.duration)
-        ctx.action_ended(rt)
-        return Status.SUCCESS
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
+        super().__init__(AtEndEffectPhase(ctx, rt))
 
 
 class ActionBranch(py_trees.decorators.Decorator):

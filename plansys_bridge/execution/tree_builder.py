@@ -2,7 +2,7 @@
 
 The root is a :class:`PlanRoot`, a parallel composite (success when every branch
 is done) with one branch per action; the graph's orderings live in each branch's
-``WaitForPredecessors`` behaviours, so actions run exactly as concurrently as their
+wait for its predecessors, so actions run exactly as concurrently as their
 dependencies allow (no hand-made nesting of sequences, which is where PlanSys2
 #155/#184/#331 went wrong). Unlike py_trees' ``Parallel`` it ticks only branches
 that can move: a branch parked in ``WaitForPredecessors`` is ticked again only when
@@ -14,7 +14,10 @@ the plan.
 Users may replace an action's subtree with a *template*: a callable that receives
 an :class:`ActionNodes` (a factory of the standard behaviours for that action) and
 returns the subtree. ``nodes.default()`` builds the standard one, so a template can
-wrap or extend it. A template must keep the behaviours that other actions wait on:
+wrap or extend it. An action without a template is a single
+:class:`~plansys_bridge.execution.standard_action.StandardAction`, which behaves as
+the standard subtree does at a fraction of py_trees' cost per behaviour.
+A template must keep the behaviours that other actions wait on:
 ``WaitForPredecessors(start)``, ``ApplyAtStartEffect`` and ``ApplyAtEndEffect``.
 """
 
@@ -38,6 +41,7 @@ from plansys_bridge.execution.behaviours import (
     WaitForPredecessors,
 )
 from plansys_bridge.execution.plan_context import ActionRuntime, PlanContext
+from plansys_bridge.execution.standard_action import StandardAction
 from plansys_bridge.knowledge.evaluation import GroundAction
 from plansys_bridge.planning.orderings import END, START
 
@@ -165,15 +169,17 @@ class PlanRoot(py_trees.composites.Composite):
 
 
 def build_tree(ctx: PlanContext) -> PlanRoot:
-    """A :class:`PlanRoot` with a wrapped branch per action."""
+    """A :class:`PlanRoot` with a branch per action: a :class:`StandardAction`, or
+    a template's subtree wrapped in an :class:`ActionBranch`."""
     branches: list[py_trees.behaviour.Behaviour] = []
     for rt in ctx.actions:
-        nodes = ActionNodes(ctx, rt)
         template = ctx.options.template_for(rt.step.action)
-        subtree = default_template(nodes) if template is None else template(nodes)
         rt.may_rest = template is None
-        if template is not None:
-            _check_template(subtree, rt)
+        if template is None:
+            branches.append(StandardAction(ctx, rt))
+            continue
+        subtree = template(ActionNodes(ctx, rt))
+        _check_template(subtree, rt)
         branches.append(ActionBranch(ctx, rt, subtree))
     return PlanRoot(f"plan {ctx.plan_id}/{ctx.plan_index}", ctx, branches)
 

@@ -1,0 +1,292 @@
+"""The steps one plan action goes through, as plain objects that py_trees can drive.
+
+Each action of a plan goes through::
+
+    wait for predecessors (start) -> at-start requirement -> at-start effects
+      -> [duration overrun?, over-all requirement, execution] re-checked while it runs
+      -> wait for predecessors (end) -> at-end requirement -> at-end effects
+
+A phase holds the logic of one of these steps and nothing of py_trees: the
+behaviours templates assemble (:mod:`plansys_bridge.execution.behaviours`) each
+drive one phase, and the standard action (:mod:`plansys_bridge.execution.standard_action`)
+drives all of them from a single behaviour, so a plan of thousands of actions does
+not pay eleven py_trees behaviours (each with its uuid, logger and tick generator)
+per action. Both share this code, so both behave the same.
+
+Phases never poll on a timer of their own: whatever can change their answer (a
+performer's FINISH, a knowledge change, a deadline registered with
+:meth:`PlanContext.schedule`) wakes the executor, which ticks the tree again.
+They read the knowledge through snapshots and change it only through
+``ProblemExpert.apply`` (atomic), so the knowledge never holds half an effect.
+"""
+
+from __future__ import annotations
+
+import asyncio
+
+from py_trees.common import Status
+
+from plansys_bridge.errors import PlansysBridgeError
+from plansys_bridge.execution.plan_context import ActionRuntime, EffectDelta, PlanContext
+from plansys_bridge.hub.auction import ActionClient, ActionOutcome
+from plansys_bridge.planning.orderings import GROUND, START, Point
+
+__all__ = [
+    "AtEndEffectPhase",
+    "AtEndReqPhase",
+    "AtStartEffectPhase",
+    "AtStartReqPhase",
+    "ExecutePhase",
+    "OverAllReqPhase",
+    "OverrunPhase",
+    "Phase",
+    "PredecessorsPhase",
+]
+
+
+class Phase:
+    """One step of an action: ``initialise`` when it is entered, ``run`` on each
+    tick until it is no longer RUNNING, ``halt`` when it is stopped from outside.
+    Errors raised by the knowledge fail the action with their message."""
+
+    label = "Action"
+
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
+        self.ctx = ctx
+        self.rt = rt
+
+    def initialise(self) -> None:
+        """Called once when the step is entered (again when it is re-entered)."""
+
+    def run(self) -> Status:
+        try:
+            return self.step()
+        except PlansysBridgeError as exc:
+            self.rt.reason = f"{self.label}: {exc}"
+            return Status.FAILURE
+
+    def step(self) -> Status:  # pragma: no cover - every subclass implements it
+        raise NotImplementedError
+
+    def halt(self) -> None:
+        """Called when the step is stopped before it ended."""
+
+    def fail(self, reason: str) -> Status:
+        self.rt.reason = reason
+        return Status.FAILURE
+
+
+class PredecessorsPhase(Phase):
+    """Wait until every happening this action's ``point`` depends on took place.
+
+    ``point="start"``: before the action starts (PlanSys2's WAIT_PREV_ACTIONS);
+    ``point="end"``: before its at-end effects (PlanSys2's CHECK_PREV_ACTIONS).
+    Fails when a predecessor stopped without reaching that happening, and (for the
+    start) once the plan is stopping, so nothing new starts after a failure.
+    """
+
+    label = "WaitForPredecessors"
+
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime, point: Point = START) -> None:
+        super().__init__(ctx, rt)
+        self.point: Point = point
+        self.waits = ctx.graph.waits(rt.index, point)
+        self._next = 0
+
+    def step(self) -> Status:
+        ctx = self.ctx
+        if self.point == START and (ctx.draining or ctx.cancelled):
+            self.rt.skipped = True
+            return self.fail(
+                "not started: the plan stopped after "
+                + (ctx.failures[0] if ctx.failures else "a cancel")
+            )
+        while self._next < len(self.waits):
+            j, point = self.waits[self._next]
+            if not ctx.reached(j, point):
+                other = ctx.actions[j]
+                if other.finished:
+                    if self.point == START:
+                        self.rt.skipped = True
+                    return self.fail(f"predecessor {other.text} stopped before its {point}")
+                ctx.park(self.rt.index)
+                return Status.RUNNING
+            self._next += 1
+        return Status.SUCCESS
+
+
+class AtStartReqPhase(Phase):
+    """Wait for the at-start requirement; fail after ``timeout`` mission seconds
+    (PlanSys2 #218 waits forever). ``timeout=None`` waits forever."""
+
+    label = "WaitAtStartReq"
+
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime, timeout: float | None = None) -> None:
+        super().__init__(ctx, rt)
+        self.timeout = timeout
+        self.deadline: float | None = None
+
+    def initialise(self) -> None:
+        if self.timeout is not None:
+            self.deadline = self.ctx.now() + self.timeout
+            self.ctx.schedule(self.deadline)
+
+    def step(self) -> Status:
+        ctx = self.ctx
+        if ctx.draining or ctx.cancelled:
+            self.rt.skipped = True
+            return self.fail("not started: the plan is stopping")
+        if ctx.holds(self.rt, self.rt.ground.at_start):
+            return Status.SUCCESS
+        if self.deadline is not None and ctx.now() >= self.deadline:
+            unmet = ctx.unmet(self.rt, self.rt.ground.at_start)
+            return self.fail(f"at start requirement {unmet} did not hold within {self.timeout:g} s")
+        return Status.RUNNING
+
+
+class AtStartEffectPhase(Phase):
+    """Apply the at-start effects (atomically) and mark the action started."""
+
+    label = "ApplyAtStartEffect"
+
+    def step(self) -> Status:
+        ctx, rt = self.ctx, self.rt
+        effect = rt.ground.start_effect
+        rt.start_delta = EffectDelta.of(
+            ctx.evaluator, effect, ctx.state(), GROUND, rt.step.duration
+        )
+        if not rt.start_delta.empty:
+            ctx.knowledge.apply(effect, GROUND, rt.step.duration)
+        ctx.action_started(rt)
+        return Status.SUCCESS
+
+
+class OverAllReqPhase(Phase):
+    """The over-all requirement, re-checked on every tick while the action runs;
+    failing halts the action (its performer gets a CANCEL)."""
+
+    label = "CheckOverAllReq"
+
+    def step(self) -> Status:
+        if self.ctx.holds(self.rt, self.rt.ground.over_all):
+            return Status.SUCCESS
+        unmet = self.ctx.unmet(self.rt, self.rt.ground.over_all)
+        return self.fail(f"over all requirement {unmet} no longer holds")
+
+
+class ExecutePhase(Phase):
+    """Hand the action to a performer through the auction and follow it.
+
+    ``initialise`` starts an :class:`ActionClient` task; its completion wakes the
+    executor, so the next tick sees the outcome at once. Halting (over-all
+    violation, timeout, cancel) cancels the client, which sends CANCEL to the
+    performer.
+    """
+
+    label = "ExecuteAction"
+
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
+        super().__init__(ctx, rt)
+        self.client: ActionClient | None = None
+        self.task: asyncio.Task[ActionOutcome] | None = None
+
+    def initialise(self) -> None:
+        ctx, rt = self.ctx, self.rt
+        self.client = ActionClient(
+            ctx.hub,
+            rt.step.action,
+            rt.step.arguments,
+            request_id=rt.record.request_id,
+            policy=ctx.options.auction,
+        )
+        rt.client = self.client
+        self.task = asyncio.get_running_loop().create_task(
+            self.client.run(
+                lambda c, s: ctx.feedback(rt, c, s),
+                confirm_cb=lambda node: ctx.confirmed(rt, node),
+            ),
+            name=f"execute {rt.record.request_id}",
+        )
+        ctx.track(self.task)
+        self.task.add_done_callback(self._ended)
+
+    def _ended(self, _task: asyncio.Task[ActionOutcome]) -> None:
+        self.ctx.resume(self.rt.index)
+        self.ctx.wake()
+
+    def step(self) -> Status:
+        task = self.task
+        if task is None:
+            return Status.RUNNING
+        if not task.done():
+            self.ctx.rest(self.rt)
+            return Status.RUNNING
+        if task.cancelled():
+            return self.fail("execution task cancelled")
+        exc = task.exception()
+        if exc is not None:
+            return self.fail(f"execution failed: {exc!r}")
+        outcome = task.result()
+        self.ctx.action_executed(self.rt, outcome)
+        if outcome.success:
+            return Status.SUCCESS
+        return self.fail(outcome.status or "performer reported failure")
+
+    def halt(self) -> None:
+        if self.task is not None and not self.task.done():
+            assert self.client is not None
+            self.client.cancel()
+            self.rt.record.end = self.ctx.now()
+            self.rt.record.performer = self.client.performer or self.rt.record.performer
+
+
+class OverrunPhase(Phase):
+    """Fail when the action runs longer than its planned duration plus
+    ``overrun_percentage`` percent (measured from its start)."""
+
+    label = "CheckTimeout"
+
+    def __init__(self, ctx: PlanContext, rt: ActionRuntime, overrun_percentage: float) -> None:
+        super().__init__(ctx, rt)
+        self.overrun_percentage = overrun_percentage
+        self.deadline: float | None = None
+
+    def initialise(self) -> None:
+        start = self.rt.record.start if self.rt.record.start is not None else self.ctx.now()
+        if self.rt.step.duration > 0:
+            self.deadline = start + self.rt.step.duration * (1.0 + self.overrun_percentage / 100.0)
+            self.ctx.schedule(self.deadline)
+
+    def step(self) -> Status:
+        if self.deadline is not None and self.ctx.now() >= self.deadline:
+            return self.fail(
+                f"overran its planned duration {self.rt.step.duration:g} s "
+                f"by more than {self.overrun_percentage:g} %"
+            )
+        return Status.SUCCESS
+
+
+class AtEndReqPhase(Phase):
+    """The at-end requirement must hold when the action ends."""
+
+    label = "CheckAtEndReq"
+
+    def step(self) -> Status:
+        if self.ctx.holds(self.rt, self.rt.ground.at_end):
+            return Status.SUCCESS
+        return self.fail(
+            f"at end requirement {self.ctx.unmet(self.rt, self.rt.ground.at_end)} does not hold"
+        )
+
+
+class AtEndEffectPhase(Phase):
+    """Apply the at-end effects (atomically) and mark the action ended."""
+
+    label = "ApplyAtEndEffect"
+
+    def step(self) -> Status:
+        ctx, rt = self.ctx, self.rt
+        effect = rt.ground.end_effect
+        ctx.knowledge.apply(effect, GROUND, rt.step.duration)
+        ctx.action_ended(rt)
+        return Status.SUCCESS
