@@ -22,6 +22,8 @@ a walk through the decorator and two sequences.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
@@ -65,6 +67,17 @@ class StandardAction(Behaviour):
         if step == 6:
             return phases.AtEndEffectPhase(ctx, rt)
         return None
+
+    def tick(self) -> Iterator[Behaviour]:
+        """py_trees' ``Behaviour.tick`` without its per-tick debug message and status
+        check (``update`` returns a Status): the same calls in the same order."""
+        if self.status != Status.RUNNING:
+            self.initialise()
+        new_status = self.update()
+        if new_status != Status.RUNNING:
+            self.stop(new_status)
+        self.status = new_status
+        yield self
 
     def update(self) -> Status:
         status = self._advance()
