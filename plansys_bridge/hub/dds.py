@@ -14,9 +14,10 @@ process's subscribers on the asyncio loop (one ``call_soon_threadsafe`` per batc
 callbacks run on the loop, in arrival order per topic
 (DDS orders per writer; messages of different topics or writers may interleave
 differently than in the in-process transport). A message a transport publishes
-reaches its own subscribers directly, as in the in-process transport, and goes out
-on DDS to everybody else; its readers ignore their own participant's samples, so
-nothing arrives twice and nothing is decoded that was never encoded.
+reaches its own subscribers directly, as in the in-process transport, when one of
+them wants it (:mod:`~plansys_bridge.hub.local_interest`), and goes out on DDS to
+everybody else; its readers ignore their own participant's samples, so nothing
+arrives twice and nothing is decoded that was never encoded.
 
 Duplicates: on a topic with a project wrapper, a project process writes the wrapper,
 and the plain message as well while a reader of the plain topic outside the project
@@ -29,7 +30,9 @@ samples from other DDS nodes (a ROS 2 PlanSys2 node) are delivered as they are.
 Bytes: samples are written and taken as raw XCDR1 through
 :mod:`~plansys_bridge.hub.dds_wire`, which does what Cyclone's Python serialiser does
 about ten times faster (with every bidder answering, serialisation was most of an
-auction's cost).
+auction's cost), and ``ActionExecution``, nearly all the traffic, through
+:mod:`~plansys_bridge.hub.dds_execution`, which writes and reads the part all
+messages of one auction share once.
 
 Topics without a DDS type (an adapter's own topic) are delivered inside the process
 only, as the in-process transport would; the first such publish logs a warning.
