@@ -7,19 +7,23 @@ what is measured is the executor: building the plan graph and the behaviour tree
 ticking it, the auctions on the hub, applying effects to the knowledge, the
 execution info. The CPU time of each run is fitted as ``per_plan + per_action * n``
 over the plan sizes: ``per_action`` is the executor's overhead per action.
+``--parts`` then runs the largest size once more and splits its CPU time into
+parts (plan graph, tree, knowledge, hub, performers: see ``executor_parts.py``).
 
 Run::
 
-    python benchmarks/bench_executor_overhead.py [--sizes 100 300 1000] [--robots 10]
+    python benchmarks/bench_executor_overhead.py [--sizes 100 300 1000] [--robots 10] [--parts]
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import time
 from typing import Any
 
 from bench_graph import world
+from executor_parts import Parts
 
 from plansys_bridge.clock import VirtualClock, run
 from plansys_bridge.execution.executor import Executor
@@ -36,7 +40,7 @@ class Instant(ActionPerformer):
         return None
 
 
-async def _run(actions: int, robots: int, clock: VirtualClock) -> float:
+async def _run(actions: int, robots: int, clock: VirtualClock, parts: Parts | None = None) -> float:
     domain, knowledge, plan = world(actions, robots)
     hub = Hub(InProcessTransport(), clock)
     await hub.start()
@@ -47,8 +51,10 @@ async def _run(actions: int, robots: int, clock: VirtualClock) -> float:
     for p in performers:
         await p.start()
     executor = Executor(hub, domain, knowledge, None, ExecutorOptions())
+    timing = parts.timing() if parts is not None else contextlib.nullcontext()
     c0 = time.process_time()
-    result = await executor.execute(plan)
+    with timing:
+        result = await executor.execute(plan)
     cpu = time.process_time() - c0
     for p in performers:
         await p.stop()
@@ -81,6 +87,7 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[100, 300, 1000])
     parser.add_argument("--robots", type=int, default=10)
     parser.add_argument("--repeat", type=int, default=2, help="runs per size (best kept)")
+    parser.add_argument("--parts", action="store_true", help="split the largest run's CPU time")
     args = parser.parse_args()
     rows = [measure(n, args.robots, args.repeat) for n in args.sizes]
     print(f"Executor CPU time with performers that cost nothing, {args.robots} robots")
@@ -92,6 +99,18 @@ def main() -> None:
         f"fit: {per_plan * 1e3:.1f} ms per plan + {per_action * 1e3:.3f} ms per action "
         "(target: < 0.2 ms per action)"
     )
+    if args.parts:
+        print_parts(max(args.sizes), args.robots)
+
+
+def print_parts(actions: int, robots: int) -> None:
+    parts = Parts()
+    clock = VirtualClock()
+    run(_run(actions, robots, clock, parts), clock)
+    print(f"where the CPU time of {actions} actions goes (exclusive, ms per action):")
+    for part, seconds in parts.seconds.most_common():
+        print(f"  {seconds / actions * 1e3:7.3f}  {part}")
+    print(f"  {sum(parts.seconds.values()) / actions * 1e3:7.3f}  total (timing included)")
 
 
 if __name__ == "__main__":
