@@ -81,6 +81,7 @@ __all__ = ["PROJECT_MARKER", "DdsTransport"]
 log = logging.getLogger(__name__)
 
 Callback = Callable[[object], None]
+Writer = Callable[[Any], bytes]
 
 PROJECT_MARKER = b"plansys_bridge"
 """USER_DATA of this project's plain-topic writers (their messages also go wrapped)."""
@@ -89,11 +90,14 @@ _TAKE_BATCH = 64
 _ANY_SAMPLE = SampleState.Any | ViewState.Any | InstanceState.Any
 
 
-def _write(endpoint: _Endpoint, data: bytes) -> None:
-    """Write a sample's XCDR1 bytes (what ``DataWriter.write`` does, faster)."""
-    ret = ddspy_write(endpoint.writer._ref, data)
+def _checked(ret: int, channel: Channel | None) -> None:
+    """Raise for what ``ddspy_write`` returned when it failed.
+
+    Samples are written as XCDR1 bytes with ``ddspy_write`` (what ``DataWriter.write``
+    does, faster); the transport keeps each writer's reference for it.
+    """
     if ret < 0:
-        raise DDSException(ret, f"writing on {endpoint.channel.dds_topic}")
+        raise DDSException(ret, f"writing on {channel.dds_topic if channel else '?'}")
 
 
 def _reader_participants(writer: Any) -> set[Any]:
@@ -164,6 +168,8 @@ class DdsTransport:
         """Local fan-out to this process's subscribers, on the loop, in arrival order."""
         self._endpoints: list[_Endpoint] = []
         self._writers: dict[str, tuple[_Endpoint, _Endpoint | None]] = {}
+        self._out: dict[str, tuple[Route, Writer, Writer | None, int, int | None]] = {}
+        """Per hub topic: its route, what writes its bytes, and the DDS writers' references."""
         self._rematch = threading.Event()
         """Set by DDS when a writer's matched readers change: look for foreign readers."""
         self._foreign_readers: dict[str, bool] = {}
@@ -208,7 +214,16 @@ class DdsTransport:
                     endpoint = self._endpoint(route, channel)
                     self._endpoints.append(endpoint)
                     made.append(endpoint)
-                self._writers[route.hub_topic] = (made[0], made[1] if len(made) > 1 else None)
+                project = made[1] if len(made) > 1 else None
+                self._writers[route.hub_topic] = (made[0], project)
+                plain, wrapped = route.to_bytes
+                self._out[route.hub_topic] = (
+                    route,
+                    plain,
+                    wrapped,
+                    made[0].writer._ref,
+                    None if project is None else project.writer._ref,
+                )
             self._discovery = publish_discovery_info(
                 self._dds.participant,
                 self.node_name,
@@ -242,6 +257,7 @@ class DdsTransport:
         self._dds.close(entities)
         self._endpoints.clear()
         self._writers.clear()
+        self._out.clear()
 
     @property
     def closed(self) -> bool:
@@ -269,20 +285,20 @@ class DdsTransport:
             raise HubError(f"cannot publish on {topic!r}: transport closed")
         if not self._dds.running or self._loop is None:
             raise HubError(f"cannot publish on {topic!r}: start the DDS transport first")
-        route = ROUTES.get(topic)
-        if route is None:
+        out = self._out.get(topic)
+        if out is None:
             self._publish_local(topic, msg)
             return
-        check_accepts(route, msg)
-        plain, wrapped = route.to_bytes
-        plain_ep, project_ep = self._writers[topic]
+        route, plain, wrapped, plain_ref, project_ref = out
+        if not isinstance(msg, route.accepts):
+            check_accepts(route, msg)  # raises, naming what the topic carries
         try:
-            if wrapped is not None and project_ep is not None:
-                _write(project_ep, wrapped(msg))
+            if project_ref is not None and wrapped is not None:
+                _checked(ddspy_write(project_ref, wrapped(msg)), route.project)
                 if self._plain_needed(route):
-                    _write(plain_ep, plain(msg))
+                    _checked(ddspy_write(plain_ref, plain(msg)), route.plain)
             else:
-                _write(plain_ep, plain(msg))
+                _checked(ddspy_write(plain_ref, plain(msg)), route.plain)
         except (DDSException, ValueError, TypeError, OverflowError) as exc:
             raise HubError(
                 f"cannot publish {type(msg).__name__} on {route.plain.dds_topic}: {exc}"
