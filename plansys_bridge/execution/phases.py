@@ -129,7 +129,7 @@ class AtStartReqPhase(Phase):
     def initialise(self) -> None:
         if self.timeout is not None:
             self.deadline = self.ctx.now() + self.timeout
-            self.ctx.schedule(self.deadline)
+            self.ctx.schedule(self.deadline, self.rt.index)
 
     def step(self) -> Status:
         ctx = self.ctx
@@ -255,7 +255,7 @@ class OverrunPhase(Phase):
         start = self.rt.record.start if self.rt.record.start is not None else self.ctx.now()
         if self.rt.step.duration > 0:
             self.deadline = start + self.rt.step.duration * (1.0 + self.overrun_percentage / 100.0)
-            self.ctx.schedule(self.deadline)
+            self.ctx.schedule(self.deadline, self.rt.index)
 
     def step(self) -> Status:
         if self.deadline is not None and self.ctx.now() >= self.deadline:

@@ -198,7 +198,8 @@ class PlanContext:
         """Branches whose performer works and that nothing has touched since."""
         self._reads: dict[int, frozenset[str] | None] = {}
         self.unfinished = len(self.actions)
-        self._deadlines: list[float] = []
+        self._deadlines: list[tuple[float, int]] = []
+        """(mission time, index of the action to wake or -1) as a heap."""
         self._wake: Callable[[], None] = lambda: None
         self._changed_steps: set[int] = set()
 
@@ -215,24 +216,25 @@ class PlanContext:
     def bind_wake(self, wake: Callable[[], None]) -> None:
         self._wake = wake
 
-    def schedule(self, deadline: float) -> None:
-        """Ask for a tick at mission time ``deadline``."""
-        heapq.heappush(self._deadlines, deadline)
+    def schedule(self, deadline: float, owner: int | None = None) -> None:
+        """Ask for a tick at mission time ``deadline``; a resting ``owner`` (action
+        index) is woken for it. Only the standard branches rest, and only their own
+        deadlines (an overrun) concern them, so a deadline passing wakes its owner,
+        not every resting branch (a plan with an at-start timeout per action would
+        otherwise tick every running action each time one of them passes)."""
+        heapq.heappush(self._deadlines, (deadline, -1 if owner is None else owner))
 
     def next_deadline(self) -> float | None:
         """The earliest deadline not yet taken by :meth:`pass_deadlines`."""
-        return self._deadlines[0] if self._deadlines else None
+        return self._deadlines[0][0] if self._deadlines else None
 
     def pass_deadlines(self) -> None:
-        """Drop the deadlines that have come; resting branches get a tick (a timeout
-        of theirs may be among them)."""
+        """Drop the deadlines that have come, waking their resting owners."""
         now = self.now()
-        passed = False
-        while self._deadlines and self._deadlines[0] <= now:
-            heapq.heappop(self._deadlines)
-            passed = True
-        if passed:
-            self._wake_resting(lambda _i: True)
+        while self._deadlines and self._deadlines[0][0] <= now:
+            _deadline, owner = heapq.heappop(self._deadlines)
+            if owner >= 0:
+                self.resume(owner)
 
     # ------------------------------------------------------------ knowledge
 

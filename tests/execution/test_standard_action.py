@@ -12,10 +12,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, replace
+from types import SimpleNamespace
 
 import pytest
 from execution_helpers import Event, PerformerSpec, knowledge_from, load_domain, run_scenario
 
+from plansys_bridge.clock import VirtualClock
 from plansys_bridge.execution.executor import Executor
 from plansys_bridge.execution.options import ExecutorOptions
 from plansys_bridge.execution.plan_context import PlanContext
@@ -151,11 +153,18 @@ def test_scenarios_end_as_their_names_say() -> None:
 
 
 def test_one_behaviour_per_action_without_a_template() -> None:
+    ctx = _context(PLAN)
+    root = build_tree(ctx)
+    assert isinstance(root, PlanRoot)
+    assert [type(b) for b in root.iterate()] == [StandardAction] * 3 + [PlanRoot]
+
+
+def _context(plan_text: str) -> PlanContext:
     knowledge = _knowledge()
     domain = load_domain("simple_example.pddl")
-    graph = build_plan_graph(parse_plan(PLAN), domain, knowledge.state())
-    ctx = PlanContext(
-        hub=None,  # type: ignore[arg-type]  # building the tree sends nothing
+    graph = build_plan_graph(parse_plan(plan_text), domain, knowledge.state())
+    return PlanContext(
+        hub=SimpleNamespace(clock=VirtualClock()),  # type: ignore[arg-type]  # only the clock is read
         knowledge=knowledge,
         evaluator=Evaluator(domain),
         graph=graph,
@@ -163,6 +172,20 @@ def test_one_behaviour_per_action_without_a_template() -> None:
         plan_id="p",
         plan_index=0,
     )
-    root = build_tree(ctx)
-    assert isinstance(root, PlanRoot)
-    assert [type(b) for b in root.iterate()] == [StandardAction] * 3 + [PlanRoot]
+
+
+def test_a_deadline_wakes_its_resting_owner_only() -> None:
+    ctx = _context(PARALLEL)
+    for rt in ctx.actions:
+        rt.may_rest = True
+        ctx.rest(rt)
+    assert ctx.resting == {0, 1} and not ctx.active
+    ctx.schedule(ctx.now())  # a deadline of nobody's (the DOT's, a template's)
+    ctx.pass_deadlines()
+    assert ctx.resting == {0, 1}
+    ctx.schedule(ctx.now() + 1.0, 1)
+    ctx.schedule(ctx.now(), 0)
+    assert ctx.next_deadline() == ctx.now()
+    ctx.pass_deadlines()
+    assert ctx.resting == {1} and ctx.active == {0}
+    assert ctx.next_deadline() == ctx.now() + 1.0
