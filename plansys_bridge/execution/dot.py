@@ -55,7 +55,8 @@ class IncrementalDot:
     written once, and a status change rewrites only its node's statement (the
     executor publishes the graph while the plan runs, and writing a large graph
     whole on every change made execution cost grow with the square of the plan's
-    length)."""
+    length). The node statements are joined in blocks of ``_BLOCK``, and a change
+    rejoins only its block, so a publication joins a few blocks, not every node."""
 
     def __init__(self, graph: PlanGraph, goal_atoms: Iterable[Atom] = (), *, name: str = "plan"):
         self._graph = graph
@@ -65,6 +66,10 @@ class IncrementalDot:
         self._nodes = [self._node(i, ActionStatus.NOT_EXECUTED) for i in range(len(graph.steps))]
         self._statuses = [ActionStatus.NOT_EXECUTED] * len(graph.steps)
         self._tail = "}\n" + self._dependencies() + self._subgoals(goal_atoms) + "}\n"
+        self._blocks = [
+            "".join(self._nodes[b : b + _BLOCK]) for b in range(0, len(self._nodes), _BLOCK)
+        ]
+        self._dirty: set[int] = set()
         self._text: str | None = None
 
     def _node(self, i: int, status: ActionStatus) -> str:
@@ -76,11 +81,15 @@ class IncrementalDot:
         if self._statuses[i] is not status:
             self._statuses[i] = status
             self._nodes[i] = self._node(i, status)
+            self._dirty.add(i // _BLOCK)
             self._text = None
 
     def text(self) -> str:
         if self._text is None:
-            self._text = "".join((self._head, *self._nodes, self._tail))
+            for b in self._dirty:
+                self._blocks[b] = "".join(self._nodes[b * _BLOCK : (b + 1) * _BLOCK])
+            self._dirty.clear()
+            self._text = "".join((self._head, *self._blocks, self._tail))
         return self._text
 
     def _dependencies(self) -> str:
@@ -106,6 +115,10 @@ class IncrementalDot:
             if achiever is not None
         )
         return str(cluster.to_string()) + links
+
+
+_BLOCK = 64
+"""Node statements per cached block of :class:`IncrementalDot`."""
 
 
 def _statement(target: str, **attrs: str) -> str:

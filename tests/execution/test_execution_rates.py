@@ -138,6 +138,25 @@ def test_the_kept_dot_text_equals_a_freshly_written_one() -> None:
     assert dot.text() != first
 
 
+def test_the_kept_dot_text_of_a_long_plan_equals_a_freshly_written_one() -> None:
+    """Changes in several blocks of node statements, some between two texts."""
+    domain, k = _world()
+    text = "".join(f"{10.0 * i:.3f}: (move r{1 + i % 2} a b) [5.000]\n" for i in range(150))
+    graph = build_plan_graph(parse_plan(text), domain, k.state())
+    dot = IncrementalDot(graph, name="long")
+    statuses = [ActionStatus.NOT_EXECUTED] * 150
+    rounds = [[0], [63, 64, 149], [1, 128], [127], [64, 65, 66, 0]]
+    for n, indexes in enumerate(rounds):
+        status = list(ActionStatus)[1 + n % 4]
+        for index in indexes:
+            dot.set_status(index, status)
+            statuses[index] = status
+        kept = dot.text()
+        assert kept == plan_graph_to_dot(graph, statuses, name="long")
+        for each in ActionStatus:  # independent of how the text is kept
+            assert kept.count(f'] {each.name.lower()}"') == statuses.count(each)
+
+
 def test_info_period_must_be_a_number() -> None:
     with pytest.raises(ConfigError) as err:
         ExecutorOptions.from_config({"info_period": -1})
