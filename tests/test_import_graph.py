@@ -33,6 +33,7 @@ LAYERS = (
 PLACES = {
     "": "errors",  # the package's own __init__
     "textfile": "errors",
+    "cancellation": "errors",  # stopping tasks; asyncio only
     "yaml_files": "clock",  # strict YAML reading with key positions (uses plugins)
     "retry": "clock",
     "plugins": "clock",

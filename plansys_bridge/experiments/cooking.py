@@ -16,7 +16,6 @@ every plan that the knowledge is still consistent.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import math
 import random
 import time
@@ -26,6 +25,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+from plansys_bridge.cancellation import cancel_and_wait
 from plansys_bridge.clock import Clock, VirtualClock, WallClock, run
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.execution.executor import Executor
@@ -263,10 +263,7 @@ class _Experiment:
                     if cfg.on_plan is not None:
                         cfg.on_plan(number, result)
         finally:
-            for task in injectors:
-                task.cancel()
-                with contextlib.suppress(asyncio.CancelledError):
-                    await task
+            await cancel_and_wait(*injectors)
             for p in self.performers:
                 await p.stop()
             await hub.close()

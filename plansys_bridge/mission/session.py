@@ -7,11 +7,11 @@ a mission starts and stops the same things in the same order.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 from collections.abc import Callable
 from typing import Any
 
+from plansys_bridge.cancellation import cancel_and_wait
 from plansys_bridge.clock import Clock
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.hub.hub import Hub
@@ -163,11 +163,7 @@ class MissionSession:
         self._say(f"bridge: {len(config.routes)} topics between ROS 1 and ROS 2")
 
     async def _shutdown(self) -> None:
-        for task in self._tasks:
-            task.cancel()
-        for task in self._tasks:
-            with contextlib.suppress(asyncio.CancelledError):
-                await task
+        await cancel_and_wait(*self._tasks)
         if self.sensing is not None:
             self.sensing.stop()
             self.sensing = None

@@ -34,6 +34,7 @@ from typing import Any, Literal, Protocol
 
 import can
 
+from plansys_bridge.cancellation import cancel_and_wait
 from plansys_bridge.errors import AdapterError
 from plansys_bridge.retry import retrying
 
@@ -277,9 +278,7 @@ class CanBusClient:
             notifier, self._notifier = self._notifier, None
             task, self._task = self._task, None
             if task is not None and task is not asyncio.current_task():
-                task.cancel()
-                with contextlib.suppress(asyncio.CancelledError):
-                    await task
+                await cancel_and_wait(task)
             # Joining python-can's reader thread blocks for up to its timeout.
             await asyncio.get_running_loop().run_in_executor(None, notifier.stop, 1.0)
 
@@ -287,15 +286,11 @@ class CanBusClient:
         """Stop reading and shut the interface down; safe to call twice."""
         self._closing = True
         if self._reopen_task is not None:
-            self._reopen_task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._reopen_task
+            await cancel_and_wait(self._reopen_task)
             self._reopen_task = None
         await self._stop_reader()
         if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
+            await cancel_and_wait(self._task)
             self._task = None
         for bus in (self._broken, self._bus):
             if bus is not None:

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import contextlib
 import logging
 import math
 import random
@@ -31,6 +30,7 @@ from pathlib import Path
 
 import can
 
+from plansys_bridge.cancellation import cancel_and_wait
 from plansys_bridge.clock import Clock, WallClock
 from plansys_bridge.errors import AdapterError
 
@@ -169,9 +169,7 @@ class BaseDouble:
 
     async def stop(self) -> None:
         if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
+            await cancel_and_wait(self._task)
             self._task = None
         await self.client.close()
 

@@ -23,13 +23,13 @@ predicate with hysteresis).
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from typing import Any
 
+from plansys_bridge.cancellation import cancel_and_wait
 from plansys_bridge.clock import VirtualClock
 from plansys_bridge.errors import ConfigError, PlansysBridgeError
 from plansys_bridge.hub.messages import PerformerState
@@ -168,9 +168,7 @@ class CanBasePerformer(ActionPerformer):
 
     async def teardown(self) -> None:
         if self._health_task is not None:
-            self._health_task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._health_task
+            await cancel_and_wait(self._health_task)
             self._health_task = None
         if self.client.is_open:
             try:

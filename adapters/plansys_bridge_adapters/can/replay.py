@@ -31,6 +31,7 @@ from typing import Any
 import can
 from can.io.blf import BLFParseError
 
+from plansys_bridge.cancellation import cancel_and_wait
 from plansys_bridge.clock import Clock
 from plansys_bridge.errors import AdapterError
 
@@ -233,9 +234,7 @@ class LogReplay:
 
     async def stop(self) -> None:
         if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
+            await cancel_and_wait(self._task)
             self._task = None
         if self._bus is not None:
             self._bus.shutdown()

@@ -28,13 +28,13 @@ whose stretch the log ends before (a cut-off recording)::
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
 
+from plansys_bridge.cancellation import cancel_and_wait
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.performers.base import (
     ActionFailed,
@@ -175,9 +175,7 @@ class MavlinkReplayPerformer(ActionPerformer):
 
     async def teardown(self) -> None:
         if self._replay_task is not None:
-            self._replay_task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._replay_task
+            await cancel_and_wait(self._replay_task)
             self._replay_task = None
 
     async def _play(self) -> None:
