@@ -135,6 +135,12 @@ class InProcessTransport:
         subs = self._subscribers.get(topic)
         if not subs:
             return
+        pending = self._pending
+        if pending and threading.get_ident() == self._loop_thread:
+            # A drain is already scheduled on the bound loop: join its batch (an
+            # auction's RESPONSEs and REJECTs mostly arrive here).
+            pending.append((topic, subs, msg))
+            return
         loop = self._loop
         if loop is None or loop.is_closed():
             try:

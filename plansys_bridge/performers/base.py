@@ -49,6 +49,7 @@ from plansys_bridge.performers.goal import (
     ActionGoal,
     PerformerContext,
     arguments_match,
+    goal_of,
     same_goal,
 )
 from plansys_bridge.plugins import NoSettings
@@ -122,6 +123,9 @@ class ActionPerformer(ABC):
         self._subs: list[Subscription] = []
         self._heartbeat_timer: asyncio.TimerHandle | None = None
         self._running = False
+        self._own_serves = type(self).serves is not ActionPerformer.serves
+        """A subclass decides what it serves itself: ask it (else the same rule is
+        read off the REQUEST before any goal is built)."""
         self.bid_costs: BidCosts | None = context.bid_costs.get(node_name)
         """Learned costs (the mission's ``bid_costs:``); where they know the action
         they are bid instead of :meth:`bid`."""
@@ -272,14 +276,26 @@ class ActionPerformer(ABC):
             self._on_cancel_msg(msg)
 
     def _on_request(self, msg: ActionExecution) -> None:
-        goal = ActionGoal(msg.action, tuple(msg.arguments), msg.request_id)
-        committed = self.committed if self._committed is not None else None
-        if committed is not None:
-            if committed == goal:
-                self._respond(goal, self._committed_bid)  # our RESPONSE may have been lost
+        # The cheap refusals come first, read off the message: a busy performer, or
+        # one whose specialised arguments do not fit, builds nothing. The goal itself
+        # is shared by every performer handed the same REQUEST (goal_of).
+        if self._committed is not None:
+            committed = self.committed
+            if committed is not None:
+                if committed == goal_of(msg):
+                    self._respond(committed, self._committed_bid)  # our RESPONSE may have been lost
+                return
+        if self._task is not None:
             return
-        if self._task is not None or not self.serves(goal):
-            return
+        if self._own_serves:
+            goal = goal_of(msg)
+            if not self.serves(goal):
+                return
+        else:
+            spec = self.actions.get(msg.action)
+            if spec is None or (spec and not arguments_match(spec, msg.arguments)):
+                return
+            goal = goal_of(msg)
         try:
             if not self.accepts(goal):
                 return

@@ -22,7 +22,14 @@ if TYPE_CHECKING:
     from plansys_bridge.knowledge.problem_expert import ProblemExpert
     from plansys_bridge.performers.bid_costs import BidCosts
 
-__all__ = ["ActionFailed", "ActionGoal", "PerformerContext", "arguments_match", "same_goal"]
+__all__ = [
+    "ActionFailed",
+    "ActionGoal",
+    "PerformerContext",
+    "arguments_match",
+    "goal_of",
+    "same_goal",
+]
 
 
 @dataclass(frozen=True)
@@ -71,3 +78,22 @@ def same_goal(goal: ActionGoal, msg: ActionExecution) -> bool:
     if goal.request_id and msg.request_id and goal.request_id != msg.request_id:
         return False
     return goal.action == msg.action and goal.arguments == tuple(msg.arguments)
+
+
+_last_request: list[tuple[ActionExecution, ActionGoal]] = []
+
+
+def goal_of(msg: ActionExecution) -> ActionGoal:
+    """The goal a REQUEST asks for, one object for every performer handed it.
+
+    On a hub every performer offering the action gets the same REQUEST object, one
+    after another; building a goal each made an auction among N bidders build N
+    equal goals. The goal of the last REQUEST is kept (by identity of the message,
+    which is frozen) and handed out again: goals are frozen too, so sharing is safe.
+    """
+    last = _last_request
+    if last and last[0][0] is msg:
+        return last[0][1]
+    goal = ActionGoal(msg.action, tuple(msg.arguments), msg.request_id)
+    last[:] = [(msg, goal)]
+    return goal
