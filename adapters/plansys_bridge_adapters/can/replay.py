@@ -11,10 +11,12 @@ power would.
 
 The log is read with python-can's readers (``can.LogReader`` picks
 CanutilsLogReader for ``.log``, ASCReader for ``.asc``, BLFReader for ``.blf``) and
-checked whole before anything starts: a line the reader cannot parse, a file that
-is not text, an ASC file without its closing ``End TriggerBlock`` or a BLF file
-shorter than its header says is one :class:`ReplayLogError` naming the file and
-the byte offset (and the line, for text logs).
+checked whole before anything starts: a line the reader cannot parse (also one
+ASCReader would skip without a word: anything that is not a header, comment,
+trigger-block line or timestamped event), a file that is not text, an ASC file
+without its closing ``End TriggerBlock`` or a BLF file shorter than its header says
+is one :class:`ReplayLogError` naming the file and the byte offset (and the line,
+for text logs).
 """
 
 from __future__ import annotations
@@ -22,8 +24,9 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import re
 import struct
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -66,20 +69,76 @@ class LogSummary:
         return self.last - self.first
 
 
+_ASC_HEADER = re.compile(
+    r"(//|date\s|base\s|(no\s+)?internal\s+events\s+logged|begin\s+triggerblock|"
+    r"end\s+triggerblock)",
+    re.IGNORECASE,
+)
+_ASC_TIME = re.compile(r"\d+\.\d+")
+_ASC_EVENT_WORD = re.compile(r"[A-Za-z][A-Za-z0-9_]*:?")
+_HEX_ID = re.compile(r"[0-9A-Fa-f]+[xX]?")
+_CANDUMP = re.compile(
+    r"\(\d+(\.\d+)?\)\s+\S+\s+[0-9A-Fa-f]{1,8}#"
+    r"([Rr]\d*|#[0-9A-Fa-f]([0-9A-Fa-f]{2})*|([0-9A-Fa-f]{2})*)(\s+[RrTt])?"
+)
+
+
+def _asc_event(word: str) -> bool:
+    return bool(_ASC_EVENT_WORD.fullmatch(word)) and not _HEX_ID.fullmatch(word)
+
+
+def _asc_check(text: str, produced: bool) -> str | None:
+    """Why a line ASCReader skipped is garbled, or None when it is one the format allows
+    and the reader ignores on purpose: header and trigger-block lines, comments, and
+    timestamped events (``Start of measurement``, ``Statistic:``, chip status, J1939,
+    system variables). A line that yielded a frame is the reader's to judge."""
+    line = text.strip()
+    if produced or not line or _ASC_HEADER.match(line):
+        return None
+    tokens = line.split()
+    if not _ASC_TIME.fullmatch(tokens[0]):
+        return "neither a header, a comment nor a timestamped frame or event"
+    if len(tokens) < 3:
+        return "a timestamp without a frame or event after it"
+    channel, word = tokens[1], tokens[2]
+    if (channel.isdigit() and _asc_event(word)) or (not channel.isdigit() and _asc_event(channel)):
+        return None
+    return "a frame python-can's ASC reader cannot parse (it would skip it)"
+
+
+def _candump_check(text: str, produced: bool) -> str | None:
+    """Why a candump line is garbled: CanutilsLogReader raises on most bad lines but
+    reads an odd number of data digits or a stray suffix without complaint."""
+    line = text.strip()
+    if not produced or _CANDUMP.fullmatch(line):
+        return None
+    return "not a candump frame (TIME) IFACE ID#DATA with whole data bytes"
+
+
 class _Lines:
     """A text log handed to a python-can reader line by line, remembering where each
-    line started, so that a line the reader chokes on can be named."""
+    line started, so that a line the reader chokes on can be named. ``check`` sees
+    every line once the reader has moved past it, with whether it gave a frame, so a
+    line the reader skips quietly is reported too."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, check: Callable[[str, bool], str | None]) -> None:
         self.path = path
         self.line = 0
         self.offset = 0
         self._next = 0
         self.last_text = ""
+        self.produced = False
+        self._check = check
+        # ASCReader loops over the file twice (header, then body): one pass, shared
+        self._lines = self._read()
 
     def __iter__(self) -> Iterator[str]:
+        return self._lines
+
+    def _read(self) -> Iterator[str]:
         with self.path.open("rb") as raw:
             for data in raw:
+                self._checked()
                 self.line += 1
                 self.offset, self._next = self._next, self._next + len(data)
                 try:
@@ -90,7 +149,13 @@ class _Lines:
                         "is not UTF-8)"
                     ) from exc
                 self.last_text = text
+                self.produced = False
                 yield text
+            self._checked()
+
+    def _checked(self) -> None:
+        if self.line and (reason := self._check(self.last_text, self.produced)):
+            raise ReplayLogError(f"{self.where()}: {reason}: {self.last_text.strip()[:60]!r}")
 
     def where(self) -> str:
         return f"{self.path}:{self.line} (byte offset {self.offset})"
@@ -103,10 +168,10 @@ class _Lines:
 def _reader(path: Path) -> tuple[Any, _Lines | None]:
     suffix = path.suffix.lower()
     if suffix == ".log":
-        lines = _Lines(path)
+        lines = _Lines(path, _candump_check)
         return can.CanutilsLogReader(lines), lines  # type: ignore[arg-type]
     if suffix == ".asc":
-        lines = _Lines(path)
+        lines = _Lines(path, _asc_check)
         return can.ASCReader(lines), lines  # type: ignore[arg-type]
     if suffix == ".blf":
         try:
@@ -126,6 +191,8 @@ def read_log(path: Path, include_tx: bool = False) -> Iterator[can.Message]:
     reader, lines = _reader(path)
     try:
         for msg in reader:
+            if lines is not None:
+                lines.produced = True
             if msg.is_error_frame or include_tx or msg.is_rx:
                 yield msg
     except ReplayLogError:
