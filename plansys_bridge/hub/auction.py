@@ -37,6 +37,7 @@ from plansys_bridge.hub.messages import (
     ExecutionType,
     Topics,
     action_execution,
+    readdressed,
 )
 from plansys_bridge.hub.routing import client_keys
 
@@ -63,6 +64,7 @@ class ClientPhase(enum.Enum):
 
 
 _INCOMING = frozenset({ExecutionType.RESPONSE, ExecutionType.FEEDBACK, ExecutionType.FINISH})
+_LISTENING = frozenset({ClientPhase.AUCTION, ClientPhase.EXECUTING})
 
 
 class ActionClient:
@@ -248,7 +250,9 @@ class ActionClient:
                     while start + sent * policy.retry_period <= now:
                         sent += 1
                 deadline = min(start + sent * policy.retry_period, give_up_at)
-            msg = await self._next(deadline)
+            # RESPONSEs arrive in bursts: take those already in hand without a wait.
+            inbox = self._inbox
+            msg = inbox.popleft() if inbox else await self._next(deadline)
             if msg is None or msg.type is not ExecutionType.RESPONSE:
                 continue  # FEEDBACK/FINISH of a performer dropped earlier: stale
             node = msg.node_id
@@ -363,8 +367,14 @@ class ActionClient:
 
     def _reject_pending(self) -> None:
         pending, self._pending_bidders = self._pending_bidders, []
+        if not pending:
+            return
+        reject = action_execution(
+            ExecutionType.REJECT, "", self.action, self.arguments, request_id=self.request_id
+        )
+        publish = self.hub.publish
         for node in pending:
-            self._send(ExecutionType.REJECT, node)
+            publish(Topics.ACTIONS_HUB, readdressed(reject, node))
 
     def _matches(self, msg: ActionExecution) -> bool:
         if msg.request_id and self.request_id and msg.request_id != self.request_id:
@@ -376,10 +386,12 @@ class ActionClient:
             isinstance(msg, ActionExecution)
             and msg.type in _INCOMING
             and self._matches(msg)
-            and self.phase in (ClientPhase.AUCTION, ClientPhase.EXECUTING)
+            and self.phase in _LISTENING
         ):
             self._inbox.append(msg)
-            self._wake()
+            waiter = self._waiter
+            if waiter is not None and not waiter.done():
+                waiter.set_result(None)
 
     def _on_freed(self, msg: ActionPerformerStatus) -> None:
         """The liveness table saw a performer of our action finish its other work."""

@@ -100,6 +100,17 @@ def action_execution(
 _new = object.__new__
 
 
+def readdressed(msg: ActionExecution, node_id: str) -> ActionExecution:
+    """``msg`` sent to ``node_id`` instead: the end of an auction among N bidders is
+    N-1 REJECTs differing only in their node, and copying one message's fields costs
+    half of building each from keywords (:func:`action_execution`)."""
+    copy = _new(ActionExecution)
+    fields = copy.__dict__
+    fields.update(msg.__dict__)
+    fields["node_id"] = node_id
+    return copy
+
+
 @dataclass(frozen=True)
 class BridgeActionExecution:
     """An :class:`ActionExecution` as ``plansys_bridge_msgs/msg/ActionExecution``.
