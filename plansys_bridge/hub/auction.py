@@ -65,6 +65,9 @@ class ClientPhase(enum.Enum):
 
 _INCOMING = frozenset({ExecutionType.RESPONSE, ExecutionType.FEEDBACK, ExecutionType.FINISH})
 _LISTENING = frozenset({ClientPhase.AUCTION, ClientPhase.EXECUTING})
+_RESPONSE = ExecutionType.RESPONSE
+"""Read once: an enum member read off its class costs about 0.3 us on Python 3.11,
+and the bidding loop compares every RESPONSE of an auction with it."""
 
 
 class ActionClient:
@@ -253,7 +256,7 @@ class ActionClient:
             # RESPONSEs arrive in bursts: take those already in hand without a wait.
             inbox = self._inbox
             msg = inbox.popleft() if inbox else await self._next(deadline)
-            if msg is None or msg.type is not ExecutionType.RESPONSE:
+            if msg is None or msg.type is not _RESPONSE:
                 continue  # FEEDBACK/FINISH of a performer dropped earlier: stale
             node = msg.node_id
             if node in excluded:

@@ -68,6 +68,14 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
+# Read once: an enum member read off its class costs about 0.3 us on Python 3.11, and
+# every performer compares every auction message it is handed with these.
+_REQUEST = ExecutionType.REQUEST
+_RESPONSE = ExecutionType.RESPONSE
+_CONFIRM = ExecutionType.CONFIRM
+_REJECT = ExecutionType.REJECT
+_CANCEL = ExecutionType.CANCEL
+
 
 class ActionPerformer(ABC):
     """Base class of every performer; subclasses implement :meth:`execute`."""
@@ -262,17 +270,17 @@ class ActionPerformer(ABC):
         if not isinstance(msg, ActionExecution) or not self._running:
             return
         kind = msg.type
-        if kind is ExecutionType.REQUEST:
+        if kind is _REQUEST:
             self._on_request(msg)
         elif msg.node_id != self.node_name:
             return
-        elif kind is ExecutionType.CONFIRM:
+        elif kind is _CONFIRM:
             self._on_confirm(msg)
-        elif kind is ExecutionType.REJECT:
+        elif kind is _REJECT:
             committed = self.committed
             if committed is not None and same_goal(committed, msg):
                 self._release_commitment()
-        elif kind is ExecutionType.CANCEL:
+        elif kind is _CANCEL:
             self._on_cancel_msg(msg)
 
     def _on_request(self, msg: ActionExecution) -> None:
@@ -313,7 +321,7 @@ class ActionPerformer(ABC):
         self._respond(goal, cost)
 
     def _respond(self, goal: ActionGoal, cost: float | None) -> None:
-        self._send(ExecutionType.RESPONSE, goal, bid=cost)
+        self._send(_RESPONSE, goal, bid=cost)
 
     def _release_commitment(self) -> None:
         self._committed = None
