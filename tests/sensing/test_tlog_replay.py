@@ -61,11 +61,18 @@ def test_the_recorded_flight_reruns_and_the_low_battery_sends_the_copter_home(
     )
 
 
-def test_a_threshold_the_flight_never_crosses_keeps_the_first_plan(tmp_path: Path) -> None:
+def test_a_threshold_the_flight_never_crosses_leaves_the_failsafe_to_stop_the_flight(
+    tmp_path: Path,
+) -> None:
+    """Nothing is sensed, but the recording's switch to RTL at 45 s is a failsafe the
+    flight home does not stand for: that action fails, and the plan goes on."""
     path = _mission(tmp_path, **{'"battery_remaining < 25"': '"voltages[0] < 3000"'})
     report = run_mission(load_mission(path), out=None)
-    assert report.result is not None and report.result.replans == 0
+    assert report.result is not None and report.result.replans == 1
     assert report.success and not report.events_applied
+    (failed,) = [a for a in report.result.actions if a.status == ActionStatus.FAILED]
+    assert failed.text == "(fly copter1 field pad)"
+    assert "switched to RTL" in failed.message and failed.end == pytest.approx(45.3, abs=0.1)
 
 
 def test_a_truncated_tlog_names_file_and_offset(tmp_path: Path) -> None:

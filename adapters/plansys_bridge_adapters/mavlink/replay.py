@@ -12,7 +12,11 @@ Each action of the plan is matched to a stretch of the recording (``segments``, 
 seconds from the log's first message, by action text): it finishes when the replay
 passes the end of the first stretch for that action not already over, reporting
 progress through it. An action with no stretch left fails saying so, and so does one
-whose stretch the log ends before (a cut-off recording)::
+whose stretch the log ends before (a cut-off recording). An action also fails when
+the recorded vehicle shows a failsafe during it, found by the same supervision as a
+live flight (:mod:`.supervision`): a failsafe STATUSTEXT or one of severity ERROR or
+worse, a switch to RTL, LAND or SMART_RTL the action does not stand for (``rtl``,
+``land``), or a HEARTBEAT system state CRITICAL or EMERGENCY::
 
     - kind: mavlink_replay
       name: copter1
@@ -43,12 +47,20 @@ from plansys_bridge.performers.base import (
     PerformerContext,
 )
 
+from .errors import MavlinkError, VehicleFault
+from .modes import mode_table
 from .tlog import TlogError, TlogSummary, read_tlog, summarize_tlog
 from .vehicle import MavlinkVehicle
+from .vehicle_state import ML
 
 __all__ = ["MavlinkReplayPerformer", "Segment"]
 
 log = logging.getLogger(__name__)
+
+FAILSAFE_MODES = ("RTL", "LAND", "SMART_RTL")
+"""Modes ArduPilot's failsafes switch to."""
+DISTRESS = {ML.MAV_STATE_CRITICAL: "CRITICAL", ML.MAV_STATE_EMERGENCY: "EMERGENCY"}
+"""HEARTBEAT system_status values that mean the vehicle is in a failsafe."""
 
 
 @dataclass(frozen=True)
@@ -125,6 +137,7 @@ class MavlinkReplayPerformer(ActionPerformer):
         self.ended = False
         self._progress = asyncio.Event()
         self._replay_task: asyncio.Task[None] | None = None
+        self._supervised = False
 
     @classmethod
     def from_config(
@@ -189,6 +202,8 @@ class MavlinkReplayPerformer(ActionPerformer):
                     await self.clock.sleep(wait)
                 self.log_time = offset
                 self.vehicle.receive(msg)
+                if msg.get_type() == "HEARTBEAT":
+                    self._check_distress(msg)
                 self._tick()
         except TlogError as exc:  # the file changed since it was checked
             log.error("%s: %s", self.node_name, exc)
@@ -204,6 +219,18 @@ class MavlinkReplayPerformer(ActionPerformer):
         text = _norm(goal.full_name)
         return next((s for s in self.segments if s.action == text and s.end > self.log_time), None)
 
+    def _expected_modes(self, goal: ActionGoal) -> frozenset[int]:
+        """Every mode but the failsafe ones (RTL, LAND, SMART_RTL), unless the action is
+        that mode (``rtl``, ``land``) or the vehicle was already in it when the action
+        began: only a change *to* one the stretch does not stand for is a failsafe."""
+        table = mode_table(self.vehicle.model or "copter")
+        action = _norm(goal.full_name).strip("()").split()[0]
+        refused = {
+            table[name] for name in FAILSAFE_MODES if name in table and name.lower() != action
+        }
+        refused.discard(self.vehicle.telemetry.custom_mode)
+        return frozenset(range(256)) - refused
+
     async def execute(self, goal: ActionGoal) -> str | None:
         segment = self._segment(goal)
         if segment is None:
@@ -211,6 +238,28 @@ class MavlinkReplayPerformer(ActionPerformer):
                 f"the recorded flight has no stretch for {goal.full_name} after "
                 f"{self.log_time:.1f} s"
             )
+        vehicle = self.vehicle
+        expected = vehicle.expected_modes = self._expected_modes(goal)
+        self._supervised = True
+        try:
+            return await vehicle.supervise(self._follow(goal, segment))
+        except MavlinkError as exc:
+            text = str(exc)
+            mode = vehicle.telemetry.custom_mode
+            if mode is not None and mode not in expected and vehicle.failsafe is None:
+                text = (
+                    f"the vehicle switched to {vehicle.mode_name_of(mode)}, which "
+                    f"{goal.full_name} does not stand for"
+                )
+            raise ActionFailed(
+                f"failsafe at {self.log_time:.1f} s of the recorded flight "
+                f"{self.log_path.name}: {text}"
+            ) from exc
+        finally:
+            self._supervised = False
+            vehicle.expected_modes = frozenset()
+
+    async def _follow(self, goal: ActionGoal, segment: Segment) -> str:
         while self.log_time < segment.end:
             if self.ended:
                 raise ActionFailed(
@@ -221,3 +270,13 @@ class MavlinkReplayPerformer(ActionPerformer):
             self.feedback(min(1.0, max(0.0, done)), f"replaying {self.log_time:.1f} s")
             await self._progress.wait()
         return f"replayed {segment.start:g}-{segment.end:g} s of {self.log_path.name}"
+
+    def _check_distress(self, msg: Any) -> None:
+        """A HEARTBEAT saying CRITICAL or EMERGENCY ends the supervised action, through
+        the vehicle's own fault channel (live supervision reads failsafes from
+        STATUSTEXT and mode changes; a replay also has the recorded system state)."""
+        state = DISTRESS.get(int(msg.system_status))
+        if state is not None and self._supervised:
+            self.vehicle._raise_fault(
+                VehicleFault(self.vehicle.url, f"vehicle state {state} (HEARTBEAT)", took_over=True)
+            )
