@@ -189,8 +189,15 @@ class InProcessTransport:
         """Deliver what was published before this callback ran (later messages wait for
         the next one, so callbacks scheduled meanwhile keep their turn)."""
         batch, self._pending = self._pending, []
+        loop = self._loop
         for topic, subs, msg in batch:
-            self._deliver(topic, subs, msg)
+            # _deliver's loop, inlined: a call less per message of an auction
+            for sub in subs:
+                if not sub.closed:
+                    try:
+                        sub.callback(msg)
+                    except Exception as exc:
+                        report_subscriber_error(loop, topic, exc)
 
     def _deliver(self, topic: str, subs: list[_InProcessSubscription], msg: object) -> None:
         for sub in subs:

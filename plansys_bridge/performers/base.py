@@ -321,7 +321,16 @@ class ActionPerformer(ABC):
         self._respond(goal, cost)
 
     def _respond(self, goal: ActionGoal, cost: float | None) -> None:
-        self._send(_RESPONSE, goal, bid=cost)
+        # Built here rather than through _send: every bidder of every auction comes by.
+        msg = action_execution(
+            _RESPONSE,
+            self.node_name,
+            goal.action,
+            goal.arguments,
+            bid=cost,
+            request_id=goal.request_id,
+        )
+        self._publish(Topics.ACTIONS_HUB, msg)
 
     def _release_commitment(self) -> None:
         self._committed = None
