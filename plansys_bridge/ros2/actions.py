@@ -32,7 +32,6 @@ answered ERROR_GOAL_TERMINATED / ERROR_UNKNOWN_GOAL_ID).
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 import time
 import uuid
@@ -40,6 +39,7 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from plansys_bridge.cancellation import cancel_and_wait
 from plansys_bridge.errors import HubError
 from plansys_bridge.interfaces.dds import dds_type, ros2_constants
 from plansys_bridge.ros2.node import ACTION_STATUS_QOS, DEFAULT_QOS, Ros2Node
@@ -274,11 +274,7 @@ class ActionServer:
         )
 
     async def close(self) -> None:
-        for task in list(self._tasks):
-            task.cancel()
-        for task in list(self._tasks):
-            with contextlib.suppress(asyncio.CancelledError):
-                await task
+        await cancel_and_wait(*self._tasks)
         for service in self._services:
             await service.close()
         self.node.remove(self._feedback, self._status)
