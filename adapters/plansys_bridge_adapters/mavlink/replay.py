@@ -34,9 +34,11 @@ from __future__ import annotations
 import asyncio
 import logging
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Annotated, Any
+
+from pydantic import Field, field_validator, model_validator
 
 from plansys_bridge.cancellation import cancel_and_wait
 from plansys_bridge.errors import ConfigError
@@ -46,6 +48,8 @@ from plansys_bridge.performers.base import (
     ActionPerformer,
     PerformerContext,
 )
+from plansys_bridge.performers.entry import PerformerConfig
+from plansys_bridge.plugins import PluginSettings
 
 from .errors import MavlinkError, VehicleFault
 from .modes import mode_table
@@ -53,7 +57,7 @@ from .tlog import TlogError, TlogSummary, read_tlog, summarize_tlog
 from .vehicle import MavlinkVehicle
 from .vehicle_state import ML
 
-__all__ = ["MavlinkReplayPerformer", "Segment"]
+__all__ = ["MavlinkReplayPerformer", "MavlinkReplaySettings", "Segment", "SegmentSettings"]
 
 log = logging.getLogger(__name__)
 
@@ -75,37 +79,73 @@ def _norm(text: str) -> str:
     return "(" + " ".join(text.strip().strip("()").lower().split()) + ")"
 
 
-def _number(value: object, key: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or value < 0:
-        raise ConfigError(f"must be a number of seconds >= 0, got {value!r}", key=key)
-    return float(value)
+class SegmentSettings(PluginSettings):
+    """One stretch of the recording: the action it serves and where it lies."""
+
+    action: str
+    """An action such as ``(fly copter1 pad field)``."""
+    start: Annotated[float, Field(ge=0)]
+    """Seconds from the log's first message."""
+    end: Annotated[float, Field(ge=0)]
+
+    @field_validator("action")
+    @classmethod
+    def _is_an_action(cls, value: str) -> str:
+        if not value.strip().startswith("(") or not value.strip().endswith(")"):
+            raise ValueError(f"an action such as (fly copter1 pad field), got {value!r}")
+        return value
+
+    @model_validator(mode="after")
+    def _ends_after_start(self) -> SegmentSettings:
+        if self.end <= self.start:
+            raise ValueError(f"end {self.end:g} is not after start {self.start:g}")
+        return self
 
 
-def parse_segments(value: object, key: str) -> list[Segment]:
-    if not isinstance(value, list) or not value:
-        raise ConfigError(
-            "a list of {action: (fly copter1 a b), start: S, end: S} (seconds into the log)",
-            key=key,
-        )
-    segments = []
-    for i, item in enumerate(value):
-        where = f"{key}[{i}]"
-        if not isinstance(item, Mapping) or set(item) != {"action", "start", "end"}:
-            raise ConfigError("expected exactly {action, start, end}", key=where)
-        action = item["action"]
-        if not isinstance(action, str) or not action.strip().startswith("("):
-            raise ConfigError("an action such as (fly copter1 pad field)", key=f"{where}.action")
-        start, end = _number(item["start"], f"{where}.start"), _number(item["end"], f"{where}.end")
-        if end <= start:
-            raise ConfigError(f"end {end:g} is not after start {start:g}", key=f"{where}.end")
-        segments.append(Segment(_norm(action), start, end))
-    return segments
+class MavlinkReplaySettings(PluginSettings):
+    """The kind-specific keys of a ``kind: mavlink_replay`` entry (the module docs)."""
+
+    log: Annotated[str, Field(min_length=1, pattern=r"\S")]
+    """The recorded flight: a .tlog file (relative to the mission file)."""
+    rate: float = Field(1.0, gt=0)
+    """2.0 replays twice as fast as recorded."""
+    segments: Annotated[list[SegmentSettings], Field(min_length=1)]
+
+
+@dataclass(frozen=True)
+class PreparedReplay:
+    """The settings with the log found, read and checked, and the stretches fitted to it."""
+
+    log: Path
+    summary: TlogSummary
+    segments: tuple[Segment, ...]
+    rate: float
+
+
+def prepare_replay(settings: MavlinkReplaySettings, base_dir: Path, key: str) -> PreparedReplay:
+    """Read the log whole (every packet checked) and refuse a stretch past its end;
+    errors name the key (and the log's file and byte offset)."""
+    path = Path(settings.log).expanduser()
+    path = path if path.is_absolute() else base_dir / path
+    try:
+        summary = summarize_tlog(path)
+    except TlogError as exc:
+        raise ConfigError(str(exc), key=f"{key}.log") from exc
+    length = summary.last - summary.first
+    for i, seg in enumerate(settings.segments):
+        if seg.end > length + 1e-6:
+            raise ConfigError(
+                f"ends at {seg.end:g} s but the log lasts {length:.1f} s",
+                key=f"{key}.segments[{i}].end",
+            )
+    segments = tuple(Segment(_norm(s.action), s.start, s.end) for s in settings.segments)
+    return PreparedReplay(path, summary, segments, settings.rate)
 
 
 class MavlinkReplayPerformer(ActionPerformer):
     """Serves a plan's actions from a recorded flight (see the module docs)."""
 
-    settings_keys: ClassVar[frozenset[str]] = frozenset({"log", "rate", "segments"})
+    Settings = MavlinkReplaySettings
 
     def __init__(
         self,
@@ -113,10 +153,7 @@ class MavlinkReplayPerformer(ActionPerformer):
         node_name: str,
         actions: Mapping[str, Sequence[str]],
         *,
-        log: Path,
-        summary: TlogSummary,
-        segments: list[Segment],
-        rate: float = 1.0,
+        settings: PreparedReplay,
         heartbeat_period: float = 1.0,
         commit_timeout: float = 2.0,
     ) -> None:
@@ -127,11 +164,11 @@ class MavlinkReplayPerformer(ActionPerformer):
             heartbeat_period=heartbeat_period,
             commit_timeout=commit_timeout,
         )
-        self.log_path = log
-        self.summary = summary
-        self.segments = segments
-        self.rate = rate
-        self.vehicle = MavlinkVehicle(f"tlog:{log}")
+        self.log_path = settings.log
+        self.summary = settings.summary
+        self.segments = settings.segments
+        self.rate = settings.rate
+        self.vehicle = MavlinkVehicle(f"tlog:{settings.log}")
         self.log_time = 0.0
         """Seconds into the recording replayed so far."""
         self.ended = False
@@ -140,43 +177,8 @@ class MavlinkReplayPerformer(ActionPerformer):
         self._supervised = False
 
     @classmethod
-    def from_config(
-        cls, config: Mapping[str, Any], context: PerformerContext, *, key: str = "performer"
-    ) -> list[ActionPerformer]:
-        parsed = cls.parse_config(config, key=key)
-        settings = parsed.settings
-        raw = settings.get("log")
-        if not isinstance(raw, str) or not raw:
-            raise ConfigError("the recorded flight: a .tlog file", key=f"{key}.log")
-        path = Path(raw).expanduser()
-        path = path if path.is_absolute() else context.base_dir / path
-        try:
-            summary = summarize_tlog(path)
-        except TlogError as exc:
-            raise ConfigError(str(exc), key=f"{key}.log") from exc
-        rate = settings.get("rate", 1.0)
-        if isinstance(rate, bool) or not isinstance(rate, int | float) or not rate > 0:
-            raise ConfigError(f"must be a number > 0, got {rate!r}", key=f"{key}.rate")
-        segments = parse_segments(settings.get("segments"), f"{key}.segments")
-        length = summary.last - summary.first
-        for i, seg in enumerate(segments):
-            if seg.end > length + 1e-6:
-                raise ConfigError(
-                    f"ends at {seg.end:g} s but the log lasts {length:.1f} s",
-                    key=f"{key}.segments[{i}].end",
-                )
-        performer = cls(
-            context,
-            parsed.name,
-            parsed.actions,
-            log=path,
-            summary=summary,
-            segments=segments,
-            rate=float(rate),
-            heartbeat_period=parsed.heartbeat_period,
-            commit_timeout=parsed.commit_timeout,
-        )
-        return [performer]
+    def prepare(cls, entry: PerformerConfig, context: PerformerContext) -> PerformerConfig:
+        return replace(entry, settings=prepare_replay(entry.settings, context.base_dir, entry.key))
 
     def connects_to(self) -> str:
         return f"the recorded flight {self.log_path} ({self.summary.messages} messages)"
