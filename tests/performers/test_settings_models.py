@@ -80,6 +80,12 @@ def test_the_mission_loads(tmp_path: Path) -> None:
         ("trees: {move: bt/move.xml}", "trees: {move: 3}", "[1].trees.move", "valid string"),
         ("bag: kitchen_nav", "bag: [kitchen_nav]", "[2].bag", "valid string"),
         ("segments: kitchen_nav.segments.yaml", "segments: []", "[2].segments", "non-empty"),
+        (
+            "segments: kitchen_nav.segments.yaml",
+            "segments: [{topic: /odom, start: 5, end: 1}]",
+            "[2].segments[0].end",
+            "must be after start",
+        ),
         ("functions: {x: robot_x}", "functions: {w: robot_w}", "[2].knowledge.functions", "'w'"),
         ("functions: {x: robot_x}", "robot_argument: -1", "[2].knowledge.robot_argument", "0"),
         ("functions: {x: robot_x}", "period: 2", "[2].knowledge.functions", "missing"),

@@ -18,9 +18,9 @@ While it runs, the performer:
   second robot's planner).
 
 It finishes when the segment ends. The entry's keys are the :class:`RosbagSettings`
-model, checked when the mission loads; the segments (a file or the list) are read
-when the performer is built, and a missing bag, topic or an empty window fails at
-start-up (``setup``), not in the middle of a run.
+model, checked when the mission loads, an inline ``segments`` list included; a
+segments file is read when the performer is built, and a missing bag, topic or an
+empty window fails at start-up (``setup``), not in the middle of a run.
 
 Mission file entry::
 
@@ -42,9 +42,9 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import Annotated, Any
+from typing import Annotated
 
-from pydantic import Field, field_validator
+from pydantic import Field, ValidationInfo, field_validator
 
 from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.pddl.model import FluentRef, FluentValue
@@ -59,7 +59,15 @@ from plansys_bridge.plugins import PluginSettings
 
 from .errors import BagError
 from .reader import BagReader, PoseSample
-from .route import PathProgress, Route, RouteError, Segment, SegmentProfile
+from .route import (
+    PathProgress,
+    Route,
+    RouteError,
+    Segment,
+    SegmentProfile,
+    SegmentSpec,
+    with_defaults,
+)
 
 POSE_FIELDS = ("x", "y", "z", "yaw")
 
@@ -86,13 +94,15 @@ class KnowledgeBinding(PluginSettings):
 class RosbagSettings(PluginSettings):
     """The kind-specific keys of a ``kind: rosbag`` performer entry."""
 
-    segments: list[Any] | str
-    """The bag stretches serving the moves: a YAML file of them, or the list
-    (checked by :meth:`Route.from_config` when the performer is built)."""
     bag: str | None = None
     """Default bag of the segments, relative to the mission file."""
     topic: str | None = None
     """Default pose topic of the segments."""
+    segments: Annotated[list[SegmentSpec], Field(min_length=1)] | str
+    """The bag stretches serving the moves: a YAML file of them (read when the
+    performer is built), or the list, checked here so that a bad item is an error
+    when the mission loads. After ``bag`` and ``topic``: the items take their
+    defaults from them."""
     rate: float = Field(1.0, gt=0.0)
     publish_rate: float = Field(10.0, gt=0.0)
     """Feedback, knowledge and recorder updates per second."""
@@ -102,12 +112,13 @@ class RosbagSettings(PluginSettings):
 
     @field_validator("segments", mode="before")
     @classmethod
-    def _file_or_list(cls, value: object) -> object:
-        """One error for a value that is neither (pydantic would list both branches)."""
+    def _file_or_list(cls, value: object, info: ValidationInfo) -> object:
+        """One error for a value that is neither (pydantic would list both branches);
+        the items of a list get the entry's default bag and topic."""
         if isinstance(value, str) and value.strip():
             return value
         if isinstance(value, list) and value:
-            return value
+            return with_defaults(value, info.data.get("bag"), info.data.get("topic"))
         raise ValueError(f"must be a segments file or a non-empty list of segments, got {value!r}")
 
 
@@ -172,15 +183,18 @@ class BagNavigationPerformer(ActionPerformer):
 
     @classmethod
     def prepare(cls, entry: PerformerConfig, context: PerformerContext) -> PerformerConfig:
-        """Read the segments (a file next to the mission, or the list) into a route."""
+        """The route of the checked segments, or of the segments file next to the mission."""
         s: RosbagSettings = entry.settings
-        route = Route.from_config(
-            s.segments,
-            context.base_dir,
-            key=f"{entry.key}.segments",
-            default_bag=s.bag,
-            default_topic=s.topic,
-        )
+        if isinstance(s.segments, str):
+            route = Route.from_config(
+                s.segments,
+                context.base_dir,
+                key=f"{entry.key}.segments",
+                default_bag=s.bag,
+                default_topic=s.topic,
+            )
+        else:
+            route = Route.from_specs(s.segments, context.base_dir)
         replay = BagReplay(
             route, s.rate, s.publish_rate, s.record_topic, s.publish_topic, s.knowledge
         )

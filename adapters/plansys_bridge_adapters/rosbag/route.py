@@ -15,15 +15,17 @@ made. The path length is measured once per segment in a streaming pass
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from plansys_bridge.errors import ConfigError
-from plansys_bridge.yaml_files import load_yaml_file
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
-from ..checks import mapping
+from plansys_bridge.errors import ConfigError
+from plansys_bridge.plugins import PluginSettings, validate_settings
+from plansys_bridge.yaml_files import KeyPositions, load_yaml_document
+
 from .errors import BagError
 from .reader import BagReader, PoseSample
 
@@ -70,6 +72,55 @@ class Segment:
     def poses(self, bag: BagReader) -> Iterator[PoseSample]:
         start, stop = self.window_ns(bag)
         return bag.poses(self.topic, start, stop)
+
+
+class SegmentSpec(PluginSettings):
+    """One item of a ``segments`` list as written. A model, so that an inline list is
+    checked with the rest of the entry when the mission loads (a segments file is
+    checked the same way when the performer is built)."""
+
+    arguments: list[str] = Field(default_factory=list)
+    """The action's arguments, position by position (``""``/``"*"`` match anything)."""
+    action: str | None = Field(None, min_length=1)
+    """Only this action (None: any action with matching arguments)."""
+    bag: str = Field(None, min_length=1, validate_default=True)
+    """The bag, relative to the mission file (default: the performer's ``bag``)."""
+    topic: str = Field(None, min_length=1, validate_default=True)
+    """The pose topic (default: the performer's ``topic``)."""
+    start: float | None = Field(None, ge=0.0)
+    """Seconds after the bag's first message (None: from the beginning)."""
+    end: float | None = Field(None, ge=0.0)
+    """Seconds after the bag's first message (None: to the end)."""
+    name: str = ""
+
+    @model_validator(mode="before")
+    @classmethod
+    def _mapping(cls, value: object) -> object:
+        """Say what an item must be (pydantic would name this class)."""
+        if isinstance(value, Mapping | SegmentSpec):
+            return value
+        raise ValueError(
+            f"a segment must be a mapping of {', '.join(cls.model_fields)}, got {value!r}"
+        )
+
+    @field_validator("bag", "topic", mode="before")
+    @classmethod
+    def _given(cls, value: object, info: ValidationInfo) -> object:
+        """Neither the segment nor the performer names it (see :func:`with_defaults`)."""
+        if value is None:
+            raise ValueError(
+                f"missing: give the segment's {info.field_name} or the performer's "
+                f"default {info.field_name}"
+            )
+        return value
+
+    @field_validator("end")
+    @classmethod
+    def _after_start(cls, value: float | None, info: ValidationInfo) -> float | None:
+        start = info.data.get("start")
+        if value is not None and start is not None and value <= start:
+            raise ValueError(f"end ({value}) must be after start ({start})")
+        return value
 
 
 def distance(a: PoseSample, b: PoseSample) -> float:
@@ -191,64 +242,81 @@ class Route:
         default_bag: str | None = None,
         default_topic: str | None = None,
     ) -> Route:
-        """Build from the ``segments`` list of a performer entry.
+        """Build from the ``segments`` of a performer entry: the list, or the path
+        (relative to ``base_dir``) of a YAML file holding it, such as the
+        ``*.segments.yaml`` the bag generator writes.
 
-        Each entry: ``arguments`` (list; ``""``/``"*"`` wildcard), optional ``action``,
-        ``bag`` (relative to ``base_dir``) and ``topic`` (or performer-level defaults),
-        optional ``start``/``end`` seconds after the bag's first message, optional
-        ``name``. ``entries`` may also be the path (relative to ``base_dir``) of a YAML
-        file holding that list, such as the ``*.segments.yaml`` the bag generator
-        writes. Wrong keys or values raise ConfigError naming ``key[i].field``.
+        Each item is a :class:`SegmentSpec`; ``default_bag``/``default_topic`` serve the
+        items without their own. Wrong keys or values raise ConfigError naming
+        ``key[i].field`` (and the file's line and column for a segments file).
         """
+        positions: KeyPositions | None = None
+        file: str | None = None
         if isinstance(entries, str):
-            entries = _load_segments_file(base_dir / entries, key)
+            entries, positions = _load_segments_file(base_dir / entries, key)
+            file = positions.file
         if not isinstance(entries, list) or not entries:
-            raise ConfigError("expected a non-empty list of segments", key=key)
-        allowed = {"arguments", "action", "bag", "topic", "start", "end", "name"}
+            raise ConfigError("expected a non-empty list of segments", key=key, file=file)
+        filled = with_defaults(entries, default_bag, default_topic)
+        try:
+            checked = validate_settings(_SegmentList, {"segments": filled})
+        except ConfigError as exc:
+            raise _in_segments(exc, key, positions) from exc
+        return cls.from_specs(checked.segments, base_dir)
+
+    @classmethod
+    def from_specs(cls, specs: Sequence[SegmentSpec], base_dir: Path) -> Route:
+        """Build from validated segments; bag paths are relative to ``base_dir``."""
         segments: list[Segment] = []
-        for i, entry in enumerate(entries):
-            where = f"{key}[{i}]"
-            entry = mapping(entry, where, allowed, "expected a mapping")
-            bag = entry.get("bag", default_bag)
-            topic = entry.get("topic", default_topic)
-            if not isinstance(bag, str) or not bag:
-                raise ConfigError("missing bag path", key=f"{where}.bag")
-            if not isinstance(topic, str) or not topic:
-                raise ConfigError("missing topic", key=f"{where}.topic")
-            args = entry.get("arguments", [])
-            if not isinstance(args, list) or not all(isinstance(a, str) for a in args):
-                raise ConfigError("expected a list of strings", key=f"{where}.arguments")
-            action = entry.get("action")
-            if action is not None and not isinstance(action, str):
-                raise ConfigError("expected an action name", key=f"{where}.action")
-            start = _seconds(entry.get("start"), f"{where}.start")
-            end = _seconds(entry.get("end"), f"{where}.end")
-            if start is not None and end is not None and end <= start:
-                raise ConfigError(f"end ({end}) must be after start ({start})", key=f"{where}.end")
-            path = Path(bag)
+        for spec in specs:
+            path = Path(spec.bag)
             if not path.is_absolute():
                 path = (base_dir / path).resolve()
             segments.append(
                 Segment(
                     bag=path,
-                    topic=topic,
-                    arguments=tuple(a.lower() for a in args),
-                    action=action.lower() if action else None,
-                    start=start,
-                    end=end,
-                    name=str(entry.get("name", "")),
+                    topic=spec.topic,
+                    arguments=tuple(a.lower() for a in spec.arguments),
+                    action=spec.action.lower() if spec.action else None,
+                    start=spec.start,
+                    end=spec.end,
+                    name=spec.name,
                 )
             )
         return cls(segments)
 
 
-def _load_segments_file(path: Path, key: str) -> Any:
-    return load_yaml_file(path, "segments file", key)
+def with_defaults(
+    entries: Sequence[Any], default_bag: str | None, default_topic: str | None
+) -> list[Any]:
+    """The segment entries with the performer's ``bag``/``topic`` filled in where an
+    entry gives none (copies: the mission file's own data stays as written)."""
+    defaults = {"bag": default_bag, "topic": default_topic}
+    out: list[Any] = []
+    for entry in entries:
+        if isinstance(entry, Mapping):
+            entry = dict(entry)
+            for name, default in defaults.items():
+                if entry.get(name) is None and default is not None:
+                    entry[name] = default
+        out.append(entry)
+    return out
 
 
-def _seconds(value: Any, key: str) -> float | None:
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, int | float) or value < 0:
-        raise ConfigError(f"expected seconds >= 0, got {value!r}", key=key)
-    return float(value)
+class _SegmentList(PluginSettings):
+    segments: list[SegmentSpec]
+
+
+def _in_segments(exc: ConfigError, key: str, positions: KeyPositions | None) -> ConfigError:
+    """``exc`` (keyed ``segments[i].field``) keyed below ``key``, and placed in the
+    segments file (where the item is ``[i]``) when the list came from one."""
+    inner = (exc.key or "").removeprefix("segments")
+    where = f"{key}{inner}"
+    if positions is None:
+        return ConfigError(exc.reason, key=where)
+    line, column = positions.locate(inner) or (None, None)
+    return ConfigError(exc.reason, key=where, file=positions.file, line=line, column=column)
+
+
+def _load_segments_file(path: Path, key: str) -> tuple[Any, KeyPositions]:
+    return load_yaml_document(path, "segments file", key)
