@@ -240,3 +240,39 @@ def test_keywords_go_through_the_same_model(virtual_hub: Hub) -> None:
 def test_settings_and_keywords_together_are_refused(virtual_hub: Hub) -> None:
     with pytest.raises(TypeError, match="not both"):
         _sim(virtual_hub, settings=SimulatedSettings(), seed=3)
+
+
+@pytest.mark.parametrize(
+    ("build", "key", "message"),
+    [
+        (lambda: FaultPlan(die_rate=2), "die_rate", "less than or equal to 1, got 2"),
+        (lambda: FaultPlan(die_at=1.0), "die_at", "less than 1, got 1.0"),
+        (lambda: FaultPlan(revive_after=-1), "revive_after", "greater than or equal to 0"),
+        (lambda: FaultPlan(dye_rate=0.1), "dye_rate", "unknown key (allowed: die_at, die_rate"),
+        (lambda: SimulatedSettings(success_rate=2), "success_rate", "less than or equal to 1"),
+        (
+            lambda: SimulatedSettings(faults={"lose_finish_rate": -0.5}),
+            "faults.lose_finish_rate",
+            "greater than or equal to 0",
+        ),
+    ],
+)
+def test_direct_construction_with_a_bad_value_is_a_config_error(
+    build: Any, key: str, message: str
+) -> None:
+    """Code building the settings gets the project's error naming the field, not
+    pydantic's ValidationError."""
+    with pytest.raises(ConfigError) as err:
+        build()
+    assert err.value.key == key, str(err.value)
+    assert message in str(err.value)
+
+
+def test_mission_validation_keeps_the_key_path_of_nested_faults() -> None:
+    """Validating an entry (what the mission loader does) does not run the direct
+    constructor: a nested fault's error still names the whole key path."""
+    entry = {"kind": "simulated", "name": "x", "actions": {"move": []}}
+    with pytest.raises(ConfigError) as err:
+        SimulatedPerformer.parse_config({**entry, "faults": {"die_at": 2}}, key="performers[4]")
+    assert err.value.key == "performers[4].faults.die_at"
+    assert FaultPlan(die_rate=0.25, revive_after=3).die_rate == 0.25
