@@ -80,7 +80,7 @@ def same_goal(goal: ActionGoal, msg: ActionExecution) -> bool:
     return goal.action == msg.action and goal.arguments == tuple(msg.arguments)
 
 
-_last_request: list[tuple[ActionExecution, ActionGoal]] = []
+_last_request: list[tuple[object, ActionGoal]] = [(None, ActionGoal("", (), ""))]
 
 
 def goal_of(msg: ActionExecution) -> ActionGoal:
@@ -90,10 +90,11 @@ def goal_of(msg: ActionExecution) -> ActionGoal:
     after another; building a goal each made an auction among N bidders build N
     equal goals. The goal of the last REQUEST is kept (by identity of the message,
     which is frozen) and handed out again: goals are frozen too, so sharing is safe.
+    The entry is read and replaced whole, so loops on other threads cannot mix two.
     """
-    last = _last_request
-    if last and last[0][0] is msg:
-        return last[0][1]
+    last_msg, last_goal = _last_request[0]
+    if last_msg is msg:
+        return last_goal
     goal = ActionGoal(msg.action, tuple(msg.arguments), msg.request_id)
-    last[:] = [(msg, goal)]
+    _last_request[0] = (msg, goal)
     return goal
