@@ -9,7 +9,7 @@ every check or touches nothing). Messages name the thing and the reason:
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from plansys_bridge.errors import KnowledgeError
@@ -23,6 +23,9 @@ __all__ = ["Admission"]
 
 Scope = Mapping[str, tuple[str, ...]]
 
+_ADMITTED_LIMIT = 100_000
+"""Facts remembered as admitted; past it, new ones are checked every time."""
+
 
 class Admission:
     """Checks against one domain; ``object_type`` says what a name is (None: unknown)."""
@@ -32,6 +35,8 @@ class Admission:
         self._types = domain_expert.types
         self._object_type = object_type
         self._goal_check = _GoalCheck(self)
+        self._admitted: dict[Atom, Atom] = {}
+        self._admitted_at = -1
 
     def check_args(
         self, what: str, text: str, params: tuple[TypedName, ...], args: tuple[str, ...]
@@ -61,6 +66,29 @@ class Admission:
             )
         self.check_args("predicate", str(atom), pdef.parameters, atom.args)
         return atom
+
+    def facts(self, atoms: Iterable[Atom], objects_version: int) -> list[Atom]:
+        """``fact`` of each atom, remembering the atoms that passed.
+
+        Why: an executor applies the same effects to the same objects over and over
+        (a robot going back and forth), and the checks cost more than the change. An
+        answer depends only on the domain (fixed) and the objects, so the memory is
+        dropped whenever ``objects_version`` (the object table's write count) moves;
+        an atom that fails is never remembered and fails every time.
+        """
+        if objects_version != self._admitted_at:
+            self._admitted.clear()
+            self._admitted_at = objects_version
+        admitted = self._admitted
+        out: list[Atom] = []
+        for atom in atoms:
+            checked = admitted.get(atom)
+            if checked is None:
+                checked = self.fact(atom)
+                if len(admitted) < _ADMITTED_LIMIT:
+                    admitted[atom] = checked
+            out.append(checked)
+        return out
 
     def fluent(self, name: str, args: tuple[str, ...]) -> FluentKey:
         key = (name.lower(), tuple(a.lower() for a in args))

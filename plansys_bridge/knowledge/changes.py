@@ -16,7 +16,7 @@ import threading
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Self
+from typing import NamedTuple, Self
 
 from plansys_bridge.knowledge.journal import JournaledTable
 from plansys_bridge.knowledge.state import FluentKey, State
@@ -45,9 +45,11 @@ class KnowledgeChange:
     """The snapshot right after the change (read it without taking the lock)."""
 
 
-@dataclass(frozen=True)
-class _Mark:
-    """Where a change started: log positions of the tables, the goal and the state."""
+class _Mark(NamedTuple):
+    """Where a change started: log positions of the tables, the goal and the state.
+
+    A named tuple: one is made per change, and a frozen dataclass costs several
+    times as much to build."""
 
     instances: int
     facts: int

@@ -30,9 +30,12 @@ MISSING = _Missing()
 class JournaledTable(Mapping[K, V], Generic[K, V]):
     """A read-only mapping to its users; ``set``/``delete`` write and log."""
 
-    __slots__ = ("_data", "_log", "_next", "_seq")
+    __slots__ = ("_data", "_log", "_next", "_seq", "writes")
 
     def __init__(self) -> None:
+        self.writes = 0
+        """Counts every write and undo: a cache of answers read from the table keeps
+        the count it was filled at and is stale once the count moves."""
         self._data: dict[K, V] = {}
         self._seq: dict[K, int] = {}
         self._next = 0
@@ -73,6 +76,7 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
 
     def set(self, key: K, value: V) -> None:
         old = self._data.get(key, MISSING)
+        self.writes += 1
         self._log.append((key, old, self._seq.get(key, -1)))
         if old is MISSING:
             self._seq[key] = self._next
@@ -81,6 +85,7 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
 
     def delete(self, key: K) -> None:
         """Remove ``key`` (KeyError when absent)."""
+        self.writes += 1
         self._log.append((key, self._data.pop(key), self._seq.pop(key)))
 
     def discard(self, key: K) -> None:
@@ -100,6 +105,7 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
     def undo(self, mark: int) -> None:
         """Put the table back as it was at ``mark``, insertion order included."""
         put_back = False
+        self.writes += 1
         while len(self._log) > mark:
             key, old, seq = self._log.pop()
             if isinstance(old, _Missing):

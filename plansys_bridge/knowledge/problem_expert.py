@@ -395,8 +395,9 @@ class ProblemExpert(ChangeTracker):
         """Apply an effect (PDDL semantics) as one validated, atomic change."""
         with self._change("apply"):
             adds, deletes, updates = self.evaluator.changes(effect, self._state, bindings, duration)
-            checked_adds = [self._admit.fact(a) for a in adds]
-            checked_deletes = [self._admit.fact(a) for a in deletes]
+            version = self._instances.writes
+            checked_adds = self._admit.facts(adds, version)
+            checked_deletes = self._admit.facts(deletes, version)
             for key in updates:
                 self._admit.fluent(*key)
             for atom in checked_deletes:
