@@ -10,25 +10,56 @@ here as its lowered form without an edit.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Container, Iterator, Mapping
+from collections.abc import Set as AbstractSet
+from dataclasses import dataclass
+from typing import TypeAlias
 
 from plansys_bridge.knowledge.evaluation import Evaluator
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import (
     TRUE,
+    AddEffect,
+    And,
     AndEffect,
+    Atom,
+    BinaryOp,
+    Compare,
+    Condition,
+    DeleteEffect,
+    DurationRef,
     Effect,
+    Equals,
     FluentRef,
     ForallEffect,
+    Negate,
+    Not,
+    Number,
+    NumericEffect,
     NumExpr,
     WhenEffect,
     is_variable,
 )
 from plansys_bridge.pddl.walkers import Visitor, iter_nodes
+from plansys_bridge.planning.orderings import GROUND
 
-__all__ = ["expr_fluents", "ground_fluent", "numeric_class", "walk_effect"]
+__all__ = [
+    "EffectAccess",
+    "Var",
+    "condition_vars",
+    "effect_access",
+    "expr_fluents",
+    "ground_fluent",
+    "numeric_class",
+    "reads_fixed",
+    "walk_effect",
+    "writes_fixed",
+]
 
 Parts = Iterator[tuple[Effect, Mapping[str, str]]]
+
+Var: TypeAlias = tuple[str, object]
+"""("a", Atom) for a ground atom, ("f", FluentKey) for a numeric fluent."""
 
 
 def numeric_class(op: str) -> str:
@@ -85,3 +116,89 @@ def expr_fluents(expr: NumExpr, bindings: Mapping[str, str]) -> set[FluentKey]:
     """The ground fluents a numeric expression reads."""
     keys = (ground_fluent(n, bindings) for n in iter_nodes(expr) if isinstance(n, FluentRef))
     return {key for key in keys if key is not None}
+
+
+_EXPRESSIONS = (Number, FluentRef, DurationRef, BinaryOp, Negate)
+
+
+def reads_fixed(cond: Condition, derived: Container[str], positive: bool = True) -> bool:
+    """Whether what ``cond`` reads is the same in every state.
+
+    Why: the plan graph asks for the atoms and fluents each happening's condition
+    reads, and a plan repeats the same ground actions many times. The answer depends
+    on the state only through a choice (a disjunction, a quantifier, a conjunction
+    under a negation, several rules of a derived predicate) or a derived predicate's
+    body; a condition with none of those (conjunctions of literals and comparisons,
+    the usual case) reads the same atoms everywhere, so its answer can be kept.
+    Anything not recognised here counts as not fixed.
+    """
+    kind = type(cond)
+    if kind is Atom:
+        return cond.predicate not in derived  # type: ignore[union-attr]
+    if kind is Equals:
+        return True
+    if kind is And:
+        return positive and all(reads_fixed(c, derived) for c in cond.operands)  # type: ignore[union-attr]
+    if kind is Not:
+        return reads_fixed(cond.operand, derived, not positive)  # type: ignore[union-attr]
+    if kind is Compare:
+        return all(type(n) in _EXPRESSIONS for n in iter_nodes(cond) if n is not cond)
+    return False
+
+
+def writes_fixed(effect: Effect) -> bool:
+    """Whether what ``effect`` reads and writes is the same in every state: no
+    conditional effect and no ``forall`` (see :func:`reads_fixed` for why)."""
+    kind = type(effect)
+    if kind is AndEffect:
+        return all(writes_fixed(e) for e in effect.effects)  # type: ignore[union-attr]
+    if kind is NumericEffect:
+        value = effect.value  # type: ignore[union-attr]
+        return all(type(n) in _EXPRESSIONS for n in iter_nodes(value))
+    return kind is AddEffect or kind is DeleteEffect
+
+
+def condition_vars(
+    ev: Evaluator, cond: Condition, bindings: Mapping[str, str], state: State
+) -> set[Var]:
+    """Every base atom and fluent ``cond`` reads in ``state`` (derived predicates
+    expanded; of a disjunction only the branch that holds there)."""
+    if isinstance(cond, And) and not cond.operands:
+        return set()
+    pos, neg = ev.condition_atoms(cond, bindings, state)
+    out: set[Var] = {("a", atom) for atom in pos | neg}
+    out |= {("f", key) for key in ev.condition_fluents(cond, bindings, state)}
+    return out
+
+
+@dataclass(frozen=True)
+class EffectAccess:
+    """What one ground effect reads and writes (see :func:`effect_access`)."""
+
+    adds: AbstractSet[Atom]
+    read: tuple[Var, ...]
+    writes: tuple[tuple[Var, str], ...]
+    """(variable, kind of write: ``del``, ``add`` or a numeric class) in order."""
+    written: AbstractSet[Var]
+
+
+def effect_access(ev: Evaluator, effect: Effect, state: State) -> EffectAccess:
+    """What a ground effect reads and writes in ``state``: the conditions of its
+    conditional effects and the values of its numeric effects are reads; deletes
+    that it also adds count as adds."""
+    adds, deletes, numeric = ev.effect_atoms(effect, GROUND, state)
+    read: set[Var] = set()
+    ops: dict[FluentKey, str] = {}
+    for sub, binds in walk_effect(effect, GROUND, ev, state):
+        if isinstance(sub, WhenEffect):
+            read |= condition_vars(ev, sub.condition, binds, state)
+        elif isinstance(sub, NumericEffect):
+            key = ground_fluent(sub.fluent, binds)
+            if key is not None:
+                cls = numeric_class(sub.op)
+                ops[key] = cls if ops.get(key, cls) == cls else "assign"
+            read |= {("f", k) for k in expr_fluents(sub.value, binds)}
+    writes: list[tuple[Var, str]] = [(("a", atom), "del") for atom in deletes - adds]
+    writes += [(("a", atom), "add") for atom in adds]
+    writes += [(("f", key), ops.get(key, "assign")) for key in numeric]
+    return EffectAccess(adds, tuple(read), tuple(writes), {v for v, _ in writes})

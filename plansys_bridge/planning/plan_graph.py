@@ -27,7 +27,8 @@ transitive reduction keeps only the edges a reader needs.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
+from collections.abc import Set as AbstractSet
 from dataclasses import dataclass, field
 from typing import TypeAlias
 
@@ -37,19 +38,18 @@ from plansys_bridge.errors import ExecutionError
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import (
-    And,
     Atom,
     Condition,
     Domain,
     Effect,
-    NumericEffect,
-    WhenEffect,
 )
 from plansys_bridge.planning.effect_access import (
-    expr_fluents,
-    ground_fluent,
-    numeric_class,
-    walk_effect,
+    EffectAccess,
+    Var,
+    condition_vars,
+    effect_access,
+    reads_fixed,
+    writes_fixed,
 )
 from plansys_bridge.planning.happening_order import (
     happening_order,
@@ -84,8 +84,7 @@ __all__ = [
     "describe_unmet",
 ]
 
-_Var: TypeAlias = tuple[str, object]
-"""("a", Atom) for a ground atom, ("f", FluentKey) for a numeric fluent."""
+_Var: TypeAlias = Var
 
 
 # ---------------------------------------------------------------- the result
@@ -217,6 +216,11 @@ class _Builder:
         self.vars: dict[_Var, _VarHistory] = {}
         self.unexplained: list[UnexplainedRequirement] = []
         self.achievers: dict[Atom, int] = {}
+        # What a ground condition reads / an effect touches, by id, for those whose
+        # answer is the same in every state (see effect_access.reads_fixed); the
+        # ground actions are shared between repeated steps and outlive the build.
+        self._fixed_reads: dict[int, tuple[_Var, ...] | None] = {}
+        self._fixed_effects: dict[int, EffectAccess | None] = {}
 
     # happenings are ints: 2*step (start), 2*step+1 (end)
 
@@ -255,7 +259,7 @@ class _Builder:
         order = happening_order(self.steps)
         self.pos = {h: p for p, h in enumerate(order)}
         state = self.initial
-        open_over_all: dict[int, set[_Var]] = {}
+        open_over_all: dict[int, Collection[_Var]] = {}
         watchers: dict[_Var, set[int]] = {}
         for h in order:
             i, is_end = divmod(h, 2)
@@ -263,7 +267,7 @@ class _Builder:
             dur = self.steps[i].duration
             point_cond = g.at_end if is_end else g.at_start
             when: When = "at end" if is_end else "at start"
-            for var in self._condition_vars(point_cond, GROUND, state):
+            for var in self._ground_vars(point_cond, state):
                 self._read(var, h, h)
             if not self.ev.holds(point_cond, state, GROUND, dur):
                 self._unexplained(i, when, point_cond, g, state)
@@ -279,7 +283,7 @@ class _Builder:
                 if atom in state:
                     self.achievers[atom] = i
             if not is_end:
-                ovars = self._condition_vars(g.over_all, GROUND, state)
+                ovars = self._ground_vars(g.over_all, state)
                 for var in ovars:
                     self._read(var, h, h + 1)
                 if not self.ev.holds(g.over_all, state, GROUND, dur):
@@ -309,48 +313,39 @@ class _Builder:
 
     # ------------------------------------------------------------ accesses
 
+    def _ground_vars(self, cond: Condition, state: State) -> Collection[_Var]:
+        """``_condition_vars`` of a ground condition, kept (in the order it was
+        found) when it is the same in every state."""
+        key = id(cond)
+        if key not in self._fixed_reads:
+            fixed = reads_fixed(cond, self.ev._derived_rules)
+            self._fixed_reads[key] = (
+                tuple(self._condition_vars(cond, GROUND, state)) if fixed else None
+            )
+        found = self._fixed_reads[key]
+        return found if found is not None else self._condition_vars(cond, GROUND, state)
+
     def _condition_vars(
         self, cond: Condition, bindings: Mapping[str, str], state: State
     ) -> set[_Var]:
-        """Every base atom and fluent ``cond`` reads in ``state`` (derived predicates
-        expanded; of a disjunction only the branch that holds there)."""
-        if isinstance(cond, And) and not cond.operands:
-            return set()
-        pos, neg = self.ev.condition_atoms(cond, bindings, state)
-        out: set[_Var] = {("a", atom) for atom in pos | neg}
-        out |= {("f", key) for key in self.ev.condition_fluents(cond, bindings, state)}
-        return out
+        return condition_vars(self.ev, cond, bindings, state)
 
     def _effect(
         self, effect: Effect, g: GroundAction, h: int, state: State
-    ) -> tuple[set[Atom], set[_Var]]:
+    ) -> tuple[AbstractSet[Atom], AbstractSet[_Var]]:
         """Record the effect's accesses; returns (atoms added, variables written)."""
-        adds, deletes, numeric = self.ev.effect_atoms(effect, GROUND, state)
-        written: set[_Var] = set()
-        read: set[_Var] = set()
-        # conditions of conditional effects and values of numeric effects are reads
-        ops: dict[FluentKey, str] = {}
-        for sub, binds in walk_effect(effect, GROUND, self.ev, state):
-            if isinstance(sub, WhenEffect):
-                read |= self._condition_vars(sub.condition, binds, state)
-            elif isinstance(sub, NumericEffect):
-                key = ground_fluent(sub.fluent, binds)
-                if key is not None:
-                    cls = numeric_class(sub.op)
-                    ops[key] = cls if ops.get(key, cls) == cls else "assign"
-                read |= {("f", k) for k in expr_fluents(sub.value, binds)}
-        for var in read:
+        key = id(effect)
+        if key not in self._fixed_effects:
+            fixed = effect_access(self.ev, effect, state) if writes_fixed(effect) else None
+            self._fixed_effects[key] = fixed
+        access = self._fixed_effects[key]
+        if access is None:
+            access = effect_access(self.ev, effect, state)
+        for var in access.read:
             self._read(var, h, h)
-        for atom in deletes - adds:
-            self._write(("a", atom), h, "del")
-            written.add(("a", atom))
-        for atom in adds:
-            self._write(("a", atom), h, "add")
-            written.add(("a", atom))
-        for key in numeric:
-            self._write(("f", key), h, ops.get(key, "assign"))
-            written.add(("f", key))
-        return adds, written
+        for var, kind in access.writes:
+            self._write(var, h, kind)
+        return access.adds, access.written
 
     def _history(self, var: _Var) -> _VarHistory:
         hist = self.vars.get(var)

@@ -21,7 +21,8 @@ from plansys_bridge.errors import ExecutionError
 from plansys_bridge.execution.dot import plan_graph_to_dot
 from plansys_bridge.hub.messages import ActionStatus
 from plansys_bridge.pddl.model import Atom
-from plansys_bridge.pddl.parser import parse_domain
+from plansys_bridge.pddl.parser import parse_condition, parse_domain, parse_effect
+from plansys_bridge.planning.effect_access import reads_fixed, writes_fixed
 from plansys_bridge.planning.plan import parse_plan
 from plansys_bridge.planning.plan_graph import PlanGraphError, build_plan_graph
 
@@ -361,3 +362,78 @@ def test_conditions_of_conditional_effects_under_forall_are_protected() -> None:
     graph.check()
     assert graph.waits(1, "end") == ((0, "end"),)
     assert "(dirty kitchen)" in graph.graph.edges[0, 1]["reason"]
+
+
+CHOICE_DOMAIN = """
+(define (domain choice)
+  (:requirements :typing :durative-actions :disjunctive-preconditions)
+  (:types robot)
+  (:predicates (lit ?r - robot) (key ?r - robot) (done ?r - robot) (ready ?r - robot))
+  (:durative-action go
+    :parameters (?r - robot)
+    :duration (= ?duration 1)
+    :condition (and (at start (or (lit ?r) (key ?r))) (at start (ready ?r)))
+    :effect (at end (done ?r)))
+  (:durative-action darken
+    :parameters (?r - robot)
+    :duration (= ?duration 1)
+    :condition (at start (lit ?r))
+    :effect (at end (not (lit ?r))))
+  (:durative-action unlock
+    :parameters (?r - robot)
+    :duration (= ?duration 1)
+    :condition (at start (ready ?r))
+    :effect (at end (key ?r)))
+)
+"""
+
+
+def test_a_repeated_step_reads_the_branch_of_its_disjunction_that_holds_then() -> None:
+    """The builder keeps what a repeated ground condition reads only when no state
+    can change it; a disjunction is read anew each time: the second ``go`` runs on
+    the key (the light is off by then), so it waits for ``unlock``, not ``darken``."""
+    domain = parse_domain(CHOICE_DOMAIN)
+    k = knowledge_from(domain, instances={"r1": "robot"}, facts=["(lit r1)", "(ready r1)"])
+    plan = parse_plan(
+        "0: (go r1) [1]\n1.001: (darken r1) [1]\n2.002: (unlock r1) [1]\n3.003: (go r1) [1]\n"
+    )
+    graph = build_plan_graph(plan, domain, k.state())
+    graph.check()
+    into_last = {(o.source, o.subject) for o in graph.orderings if o.target == 3}
+    assert (2, "(key r1)") in into_last
+    assert all(subject != "(lit r1)" for _, subject in into_last)
+    # the fixed part (ready r1) is read by both runs of go and by unlock, written by none
+    assert graph.ground[0] is graph.ground[3]
+
+
+@pytest.mark.parametrize(
+    ("text", "fixed"),
+    [
+        ("(and (a x) (not (b x)) (> (+ (f x) 1) 2) (= x y) (not (= x z)))", True),
+        ("(or (a x) (b x))", False),
+        ("(not (and (a x) (b x)))", False),
+        ("(exists (?y - t) (a ?y))", False),
+        ("(forall (?y - t) (a ?y))", False),
+        ("(imply (a x) (b x))", False),
+        ("(and (a x) (near x))", False),
+        ("(not (near x))", False),
+    ],
+)
+def test_only_conditions_without_a_choice_or_derived_atom_read_the_same_everywhere(
+    text: str, fixed: bool
+) -> None:
+    assert reads_fixed(parse_condition(text), {"near"}) is fixed
+
+
+@pytest.mark.parametrize(
+    ("text", "fixed"),
+    [
+        ("(and (a x) (not (b x)) (increase (f x) (* 2 (g x))) (assign (h x) 3))", True),
+        ("(and (a x) (when (b x) (c x)))", False),
+        ("(forall (?y - t) (a ?y))", False),
+    ],
+)
+def test_only_effects_without_when_or_forall_touch_the_same_everywhere(
+    text: str, fixed: bool
+) -> None:
+    assert writes_fixed(parse_effect(text)) is fixed
