@@ -138,7 +138,7 @@ class ChangeTracker:
         changed_fluents, fluents_before = self._fluents.changes_since(start.fluents)
         removed_fluents = frozenset(k for k in fluents_before if k not in self._fluents)
         added_instances, removed_instances = self._instances.changes_since(start.instances)
-        goal_changed = start.goal != self._goal
+        goal_changed = start.goal is not self._goal and start.goal != self._goal
         if not (
             added
             or removed

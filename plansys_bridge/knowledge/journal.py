@@ -122,9 +122,14 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
     def changes_since(self, mark: int) -> tuple[dict[K, V], dict[K, V]]:
         """``(now, before)``: the entries that differ, as they are now (keys still
         there) and as they were at ``mark`` (keys that were there)."""
+        log = self._log
+        if len(log) == mark:  # most changes leave most tables alone
+            return {}, {}
         first: dict[K, V | _Missing] = {}
-        for key, old, _ in self._log[mark:]:
-            first.setdefault(key, old)
+        for i in range(mark, len(log)):
+            key, old, _ = log[i]
+            if key not in first:
+                first[key] = old
         now: dict[K, V] = {}
         before: dict[K, V] = {}
         for key, old in first.items():
