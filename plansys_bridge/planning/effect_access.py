@@ -180,12 +180,17 @@ class EffectAccess:
     writes: tuple[tuple[Var, str], ...]
     """(variable, kind of write: ``del``, ``add`` or a numeric class) in order."""
     written: AbstractSet[Var]
+    deleted: AbstractSet[Atom] = frozenset()
+    """The atoms deleted and not added again."""
+    plain: bool = False
+    """Applying the effect to any state only deletes ``deleted`` and adds ``adds``."""
 
 
-def effect_access(ev: Evaluator, effect: Effect, state: State) -> EffectAccess:
+def effect_access(ev: Evaluator, effect: Effect, state: State, fixed: bool = False) -> EffectAccess:
     """What a ground effect reads and writes in ``state``: the conditions of its
     conditional effects and the values of its numeric effects are reads; deletes
-    that it also adds count as adds."""
+    that it also adds count as adds. ``fixed``: the caller knows the effect does
+    the same in every state (:func:`writes_fixed`)."""
     adds, deletes, numeric = ev.effect_atoms(effect, GROUND, state)
     read: set[Var] = set()
     ops: dict[FluentKey, str] = {}
@@ -201,4 +206,7 @@ def effect_access(ev: Evaluator, effect: Effect, state: State) -> EffectAccess:
     writes: list[tuple[Var, str]] = [(("a", atom), "del") for atom in deletes - adds]
     writes += [(("a", atom), "add") for atom in adds]
     writes += [(("f", key), ops.get(key, "assign")) for key in numeric]
-    return EffectAccess(adds, tuple(read), tuple(writes), {v for v, _ in writes})
+    deleted = deletes - adds
+    written = {v for v, _ in writes}
+    plain = fixed and not numeric
+    return EffectAccess(adds, tuple(read), tuple(writes), written, deleted, plain)

@@ -28,7 +28,6 @@ transitive reduction keeps only the edges a reader needs.
 from __future__ import annotations
 
 from collections.abc import Collection, Iterable, Mapping, Sequence
-from collections.abc import Set as AbstractSet
 from dataclasses import dataclass, field
 from typing import TypeAlias
 
@@ -276,9 +275,12 @@ class _Builder:
                 for var in open_over_all.pop(i, set()):
                     watchers.get(var, set()).discard(i)
             effect = g.end_effect if is_end else g.start_effect
-            touched = self._effect(effect, g, h, state)
-            state = self.ev.apply(effect, state, GROUND, dur)
-            added, written = touched
+            access = self._effect(effect, h, state)
+            if access.plain:  # same adds and deletes in every state: no need to walk
+                state = state.with_changes(adds=access.adds, deletes=access.deleted)
+            else:
+                state = self.ev.apply(effect, state, GROUND, dur)
+            added, written = access.adds, access.written
             for atom in added:
                 if atom in state:
                     self.achievers[atom] = i
@@ -330,14 +332,14 @@ class _Builder:
     ) -> set[_Var]:
         return condition_vars(self.ev, cond, bindings, state)
 
-    def _effect(
-        self, effect: Effect, g: GroundAction, h: int, state: State
-    ) -> tuple[AbstractSet[Atom], AbstractSet[_Var]]:
-        """Record the effect's accesses; returns (atoms added, variables written)."""
+    def _effect(self, effect: Effect, h: int, state: State) -> EffectAccess:
+        """Record the effect's accesses; returns them (atoms added, variables written)."""
         key = id(effect)
         if key not in self._fixed_effects:
-            fixed = effect_access(self.ev, effect, state) if writes_fixed(effect) else None
-            self._fixed_effects[key] = fixed
+            fixed = writes_fixed(effect)
+            self._fixed_effects[key] = (
+                effect_access(self.ev, effect, state, fixed) if fixed else None
+            )
         access = self._fixed_effects[key]
         if access is None:
             access = effect_access(self.ev, effect, state)
@@ -345,7 +347,7 @@ class _Builder:
             self._read(var, h, h)
         for var, kind in access.writes:
             self._write(var, h, kind)
-        return access.adds, access.written
+        return access
 
     def _history(self, var: _Var) -> _VarHistory:
         hist = self.vars.get(var)
@@ -430,26 +432,32 @@ class _Builder:
         start_waits: list[list[tuple[int, Point]]] = [[] for _ in range(n)]
         end_waits: list[list[tuple[int, Point]]] = [[] for _ in range(n)]
         graph = nx.DiGraph()
-        for i, step in enumerate(self.steps):
-            graph.add_node(i, action=step.text, time=step.time, duration=step.duration)
-        for src, dst in sorted(kept, key=lambda e: (self.pos[e[1]], self.pos[e[0]])):
+        graph.add_nodes_from(
+            (i, {"action": step.text, "time": step.time, "duration": step.duration})
+            for i, step in enumerate(self.steps)
+        )
+        # the step-level edges are gathered first and given to networkx at once
+        steps: dict[tuple[int, int], tuple[list[Ordering], set[tuple[Point, Point]]]] = {}
+        pos = self.pos
+        for src, dst in sorted(kept, key=lambda e: (pos[e[1]], pos[e[0]])):
             kind, subject = self.edges[(src, dst)]
             o = Ordering(src // 2, point_of(src), dst // 2, point_of(dst), kind, subject)
             orderings.append(o)
             (end_waits if dst % 2 else start_waits)[dst // 2].append((o.source, o.source_point))
-            if graph.has_edge(o.source, o.target):
-                data = graph.edges[o.source, o.target]
-                data["orderings"].append(o)
-                data["points"].add((o.source_point, o.target_point))
-                data["reason"] += "; " + o.reason
+            found = steps.get((o.source, o.target))
+            if found is None:
+                steps[(o.source, o.target)] = ([o], {(o.source_point, o.target_point)})
             else:
-                graph.add_edge(
-                    o.source,
-                    o.target,
-                    reason=o.reason,
-                    orderings=[o],
-                    points={(o.source_point, o.target_point)},
-                )
+                found[0].append(o)
+                found[1].add((o.source_point, o.target_point))
+        graph.add_edges_from(
+            (
+                source,
+                target,
+                {"reason": "; ".join(o.reason for o in os), "orderings": os, "points": points},
+            )
+            for (source, target), (os, points) in steps.items()
+        )
         step_order: list[int] = []
         seen: set[int] = set()
         for h in order:

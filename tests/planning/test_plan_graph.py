@@ -437,3 +437,42 @@ def test_only_effects_without_when_or_forall_touch_the_same_everywhere(
     text: str, fixed: bool
 ) -> None:
     assert writes_fixed(parse_effect(text)) is fixed
+
+
+TOGGLE_DOMAIN = """
+(define (domain toggle)
+  (:requirements :typing :durative-actions :numeric-fluents)
+  (:types robot)
+  (:predicates (on ?r - robot) (seen ?r - robot))
+  (:functions (count ?r - robot))
+  (:durative-action blink
+    :parameters (?r - robot)
+    :duration (= ?duration 1)
+    :condition (at start (on ?r))
+    :effect (and (at start (not (on ?r))) (at end (on ?r))
+                 (at end (not (seen ?r))) (at end (seen ?r))))
+  (:durative-action tick
+    :parameters (?r - robot)
+    :duration (= ?duration 1)
+    :effect (at end (increase (count ?r) 2)))
+)
+"""
+
+
+def test_repeated_steps_lead_to_the_state_their_effects_make() -> None:
+    """The builder applies a repeated effect without a choice from what it found the
+    first time; an atom both deleted and added stays true and numeric effects are
+    still applied to the value of the moment."""
+    domain = parse_domain(TOGGLE_DOMAIN)
+    k = knowledge_from(domain, instances={"r1": "robot"}, facts=["(on r1)"])
+    k.set_function("(= (count r1) 1)")
+    plan = parse_plan(
+        "0: (blink r1) [1]\n1.001: (tick r1) [1]\n2.002: (blink r1) [1]\n3.003: (tick r1) [1]\n"
+    )
+    graph = build_plan_graph(plan, domain, k.state())
+    graph.check()
+    final = graph.final_state
+    assert final is not None
+    assert final.facts == {Atom("on", ("r1",)), Atom("seen", ("r1",))}
+    assert final.value("count", ("r1",)) == 5.0
+    assert graph.achievers[Atom("seen", ("r1",))] == 2
