@@ -35,15 +35,24 @@ import functools
 import importlib
 import importlib.util
 from collections.abc import Mapping, Sequence
+from contextvars import ContextVar
 from importlib.metadata import EntryPoint, entry_points
-from typing import Any, Generic, TypeVar
+from typing import Any, Generic, Self, TypeVar
 
-from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    ModelWrapValidatorHandler,
+    ValidationError,
+    ValidationInfo,
+    model_validator,
+)
 
 from plansys_bridge.errors import ConfigError, PluginError
 
 __all__ = [
     "GROUPS",
+    "DirectSettings",
     "NoSettings",
     "PluginRegistry",
     "PluginSettings",
@@ -79,6 +88,40 @@ class PluginSettings(BaseModel):
     and the validated settings cannot change under the running plugin."""
 
     model_config = ConfigDict(extra="forbid", strict=True, frozen=True, allow_inf_nan=False)
+
+
+class DirectSettings(PluginSettings):
+    """Settings that code also builds directly (``FaultPlan(die_rate=0.1)``): a bad
+    value there is the project's ConfigError naming the field, as in a mission file,
+    not pydantic's ValidationError.
+
+    Only a validation without a context is direct construction: the mission loader
+    (:func:`validate_settings`) always passes one, so its ValidationError, which keeps
+    the whole key path and the file:line:col, reaches it untouched, nested models
+    included."""
+
+    @model_validator(mode="wrap")
+    @classmethod
+    def _config_error_when_built_directly(
+        cls, data: Any, handler: ModelWrapValidatorHandler[Self], info: ValidationInfo
+    ) -> Self:
+        if info.context is not None or _BUILDING_DIRECTLY.get():
+            # the loader's validation, or a model nested in one built directly: the
+            # outermost one names the whole key path
+            return handler(data)
+        token = _BUILDING_DIRECTLY.set(True)
+        try:
+            return handler(data)
+        except ValidationError:
+            # again through validate_settings for the message a mission file gets;
+            # it raises the ConfigError (a bad value fails every time)
+            validate_settings(cls, data)
+            raise
+        finally:
+            _BUILDING_DIRECTLY.reset(token)
+
+
+_BUILDING_DIRECTLY: ContextVar[bool] = ContextVar("plansys_bridge_building_settings", default=False)
 
 
 class NoSettings(PluginSettings):

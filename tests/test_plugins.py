@@ -446,3 +446,34 @@ def test_a_missing_module_is_told_apart_from_a_missing_package(installed: Any) -
         assert words in str(err.value), str(err.value)
         if name != "needs":
             assert "install" not in str(err.value)
+
+
+class _Grip(plugins.DirectSettings):
+    force: float = Field(10.0, gt=0)
+
+
+class _Arm(plugins.DirectSettings):
+    grip: _Grip = Field(default_factory=_Grip)
+    reach: float = 1.0
+
+
+def test_direct_settings_built_from_code_raise_config_error_with_the_whole_key_path() -> None:
+    assert _Arm(grip={"force": 3.0}).grip.force == 3.0
+    with pytest.raises(ConfigError) as err:
+        _Arm(grip={"force": -1.0})
+    assert err.value.key == "grip.force"
+    with pytest.raises(ConfigError) as err:
+        _Grip(forse=1.0)
+    assert err.value.key == "forse" and "unknown key (allowed: force)" in str(err.value)
+    # a failed construction leaves nothing behind: the next one is checked afresh
+    assert _Grip(force=2.0).force == 2.0
+
+
+def test_direct_settings_validated_by_the_loader_keep_pydantics_error_for_its_placing() -> None:
+    from pydantic import ValidationError
+
+    with pytest.raises(ValidationError):
+        _Arm.model_validate({"grip": {"force": -1.0}}, context={})
+    with pytest.raises(ConfigError) as err:
+        validate_settings(_Arm, {"grip": {"force": -1.0}}, key="performers[2]")
+    assert err.value.key == "performers[2].grip.force"

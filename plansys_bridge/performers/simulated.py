@@ -25,7 +25,7 @@ import random
 from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Annotated, Any, TypedDict
 
-from pydantic import Field, ValidationError, field_validator
+from pydantic import Field, field_validator
 
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.hub.settings import is_number
@@ -36,7 +36,7 @@ from plansys_bridge.performers.base import (
     PerformerContext,
 )
 from plansys_bridge.performers.entry import PerformerConfig
-from plansys_bridge.plugins import PluginSettings, validate_settings
+from plansys_bridge.plugins import DirectSettings, validate_settings
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack
@@ -48,30 +48,7 @@ log = logging.getLogger(__name__)
 DurationHint = Callable[[ActionGoal], float | None]
 
 
-class _DirectSettings(PluginSettings):
-    """Settings that code also builds directly (``FaultPlan(die_rate=0.1)``): a bad
-    value there is the project's ConfigError naming the field, as in a mission file,
-    not pydantic's ValidationError."""
-
-    if not TYPE_CHECKING:  # mypy keeps the pydantic plugin's typed keywords
-
-        def __init__(self, **data: Any) -> None:
-            try:
-                super().__init__(**data)
-            except ValidationError:
-                # again through validate_settings for the message a mission file
-                # gets; it raises the ConfigError (a bad value fails every time)
-                validate_settings(type(self), data)
-                raise
-
-        # Validation must not run through this __init__: a mission entry is checked
-        # with model_validate (validate_settings), nested models included, and its
-        # error keeps the whole key path and file:line:col only as a ValidationError.
-        # Pydantic skips __init__ whose function carries this mark (its own does).
-        __init__.__pydantic_base_init__ = True
-
-
-class FaultPlan(_DirectSettings):
+class FaultPlan(DirectSettings):
     """Seeded fault rates for a :class:`SimulatedPerformer` (all off by default): the
     entry's ``faults:`` keys, also built directly by the soak and experiment runs."""
 
@@ -97,7 +74,7 @@ def _none_is_default(value: object) -> object:
     return {} if value is None else value
 
 
-class SimulatedSettings(_DirectSettings):
+class SimulatedSettings(DirectSettings):
     """The kind-specific keys of a ``kind: simulated`` performer entry."""
 
     durations: dict[str, Annotated[float, Field(ge=0.0)]] = Field(default_factory=dict)
