@@ -148,3 +148,30 @@ def test_nav2_double_blocked_names_must_be_locations(tmp_path: Path) -> None:
         resolve(settings, "performers[0]", tmp_path)
     assert err.value.key == "performers[0].double.blocked[1]"
     assert "'moon' is not a location" in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("line", "key", "message"),
+    [
+        ("    master_uri: ftp://127.0.0.1:11311", "master_uri", "must look like http://HOST:PORT"),
+        ("    master_uri: http://127.0.0.1:port", "master_uri", "bad port"),
+        ("    action_ns: /move base", "action_ns", "not a ROS topic name"),
+    ],
+)
+def test_ros1_master_and_action_namespace_are_checked_when_the_mission_loads(
+    tmp_path: Path, line: str, key: str, message: str
+) -> None:
+    path = tmp_path / "mission.yaml"
+    path.write_text(
+        MISSION.format(
+            domain=DOMAIN,
+            kind="ros1_move_base",
+            connection=line,
+            locations="    locations:\n      hall: {x: 0.0, y: 0.0}\n      kitchen: {x: 4, y: 1}",
+        )
+    )
+    with pytest.raises(ConfigError) as err:
+        load_mission(path)
+    text = str(err.value)
+    assert err.value.key == f"performers[0].{key}", text
+    assert f"{path}:{line_of(path, line.strip())}:" in text and message in text, text

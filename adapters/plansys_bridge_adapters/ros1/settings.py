@@ -12,10 +12,11 @@
         target_arg: -1                        # the argument naming the destination
         locations: {hall: {x: 0.0, y: 0.0, yaw: 0.0}, kitchen: {x: 4.0, y: 1.0, yaw: 1.57}}
 
-The location table is part of :class:`MoveBaseEntry`, so a malformed one is an error
-when the mission loads, naming file:line:col and the key path. Every object the
-domain lets a served action go to must have a location: a missing one is an error
-naming the key when the performer is built, not a failure mid-mission.
+The location table, ``master_uri`` and ``action_ns`` are part of
+:class:`MoveBaseEntry`, so a malformed one is an error when the mission loads,
+naming file:line:col and the key path. Every object the domain lets a served action
+go to must have a location: a missing one is an error naming the key when the
+performer is built, not a failure mid-mission.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.ros1.errors import Ros1Error
@@ -41,6 +42,26 @@ class MoveBaseEntry(NavGoalSettings):
     master_uri: str | None = Field(None, min_length=1)
     """Default: ``$ROS_MASTER_URI``, else the local master."""
     action_ns: str = Field("/move_base", min_length=1)
+
+    @field_validator("master_uri")
+    @classmethod
+    def _master_uri(cls, value: str | None) -> str | None:
+        """A mistyped URI is a load-time error placed at its line, not a failure
+        when the performer is built after the mission has started loading others."""
+        if value is None:
+            return None
+        try:
+            return check_uri(value.strip())
+        except Ros1Error as exc:
+            raise ValueError(str(exc)) from exc
+
+    @field_validator("action_ns")
+    @classmethod
+    def _action_ns(cls, value: str) -> str:
+        try:
+            return resolve_topic(value.strip())
+        except Ros1Error as exc:
+            raise ValueError(str(exc)) from exc
 
 
 @dataclass(frozen=True)
