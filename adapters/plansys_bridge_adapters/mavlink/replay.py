@@ -36,7 +36,7 @@ import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 from pydantic import Field, field_validator, model_validator
 
@@ -51,11 +51,10 @@ from plansys_bridge.performers.base import (
 from plansys_bridge.performers.entry import PerformerConfig
 from plansys_bridge.plugins import PluginSettings
 
-from .errors import MavlinkError, VehicleFault
+from .errors import MavlinkError
 from .modes import mode_table
 from .tlog import TlogError, TlogSummary, read_tlog, summarize_tlog
 from .vehicle import MavlinkVehicle
-from .vehicle_state import ML
 
 __all__ = ["MavlinkReplayPerformer", "MavlinkReplaySettings", "Segment", "SegmentSettings"]
 
@@ -63,8 +62,6 @@ log = logging.getLogger(__name__)
 
 FAILSAFE_MODES = ("RTL", "LAND", "SMART_RTL")
 """Modes ArduPilot's failsafes switch to."""
-DISTRESS = {ML.MAV_STATE_CRITICAL: "CRITICAL", ML.MAV_STATE_EMERGENCY: "EMERGENCY"}
-"""HEARTBEAT system_status values that mean the vehicle is in a failsafe."""
 
 
 @dataclass(frozen=True)
@@ -174,7 +171,6 @@ class MavlinkReplayPerformer(ActionPerformer):
         self.ended = False
         self._progress = asyncio.Event()
         self._replay_task: asyncio.Task[None] | None = None
-        self._supervised = False
 
     @classmethod
     def prepare(cls, entry: PerformerConfig, context: PerformerContext) -> PerformerConfig:
@@ -204,8 +200,6 @@ class MavlinkReplayPerformer(ActionPerformer):
                     await self.clock.sleep(wait)
                 self.log_time = offset
                 self.vehicle.receive(msg)
-                if msg.get_type() == "HEARTBEAT":
-                    self._check_distress(msg)
                 self._tick()
         except TlogError as exc:  # the file changed since it was checked
             log.error("%s: %s", self.node_name, exc)
@@ -242,7 +236,6 @@ class MavlinkReplayPerformer(ActionPerformer):
             )
         vehicle = self.vehicle
         expected = vehicle.expected_modes = self._expected_modes(goal)
-        self._supervised = True
         try:
             return await vehicle.supervise(self._follow(goal, segment))
         except MavlinkError as exc:
@@ -258,7 +251,6 @@ class MavlinkReplayPerformer(ActionPerformer):
                 f"{self.log_path.name}: {text}"
             ) from exc
         finally:
-            self._supervised = False
             vehicle.expected_modes = frozenset()
 
     async def _follow(self, goal: ActionGoal, segment: Segment) -> str:
@@ -272,13 +264,3 @@ class MavlinkReplayPerformer(ActionPerformer):
             self.feedback(min(1.0, max(0.0, done)), f"replaying {self.log_time:.1f} s")
             await self._progress.wait()
         return f"replayed {segment.start:g}-{segment.end:g} s of {self.log_path.name}"
-
-    def _check_distress(self, msg: Any) -> None:
-        """A HEARTBEAT saying CRITICAL or EMERGENCY ends the supervised action, through
-        the vehicle's own fault channel (live supervision reads failsafes from
-        STATUSTEXT and mode changes; a replay also has the recorded system state)."""
-        state = DISTRESS.get(int(msg.system_status))
-        if state is not None and self._supervised:
-            self.vehicle._raise_fault(
-                VehicleFault(self.vehicle.url, f"vehicle state {state} (HEARTBEAT)", took_over=True)
-            )

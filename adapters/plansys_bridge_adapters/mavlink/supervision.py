@@ -2,8 +2,9 @@
 
 While an action runs under :meth:`VehicleSupervision.supervise`, each of these
 becomes the exception that ends it: a failsafe (its STATUSTEXT), a mode nobody asked
-for (someone else took the vehicle: RC, another ground station), a STATUSTEXT of
-severity ERROR or worse, a disarm while the action needs the vehicle armed, a silent
+for (someone else took the vehicle: RC, another ground station), a HEARTBEAT whose
+system state turns CRITICAL or EMERGENCY (ArduPilot's sign that a failsafe holds), a
+STATUSTEXT of severity ERROR or worse, a disarm while the action needs the vehicle armed, a silent
 link (no HEARTBEAT) and a closed link. A mode change ArduPilot makes on its own while
 it boots is a fallback, not a takeover, and is only counted.
 """
@@ -28,7 +29,11 @@ log = logging.getLogger(__name__)
 T = TypeVar("T")
 
 EXPLAIN_WAIT = 0.3
-"""Seconds a mode change nobody asked for waits for the STATUSTEXT explaining it."""
+"""Seconds a mode change nobody asked for, or a system state turning CRITICAL, waits
+for the STATUSTEXT explaining it."""
+
+DISTRESS = {ML.MAV_STATE_CRITICAL: "CRITICAL", ML.MAV_STATE_EMERGENCY: "EMERGENCY"}
+"""HEARTBEAT system_status values that mean the vehicle is in a failsafe."""
 
 
 class VehicleSupervision:
@@ -70,10 +75,16 @@ class VehicleSupervision:
         return not self.telemetry.armed and not self.telemetry.ekf_ready()
 
     # ------------------------------------------------------------ what it hears
-    def _check_heartbeat(self, was_armed: bool) -> None:
+    def _check_heartbeat(self, was_armed: bool, was_status: int | None = None) -> None:
         tel = self.telemetry
         if tel.custom_mode is not None:
             self._check_mode(tel.custom_mode)
+        state = tel.system_status
+        loop, fault = self._loop, self._fault
+        if state in DISTRESS and state != was_status and fault is not None and loop is not None:
+            # ArduPilot reports CRITICAL as a failsafe triggers and may send the
+            # HEARTBEAT before the STATUSTEXT naming it: give that a moment to arrive
+            loop.call_later(EXPLAIN_WAIT, self._distress_fault, fault)
         if was_armed and not tel.armed:
             self.failsafe = None  # landed and disarmed: a new flight may start
         if was_armed and not tel.armed and self.expect_armed:
@@ -119,6 +130,18 @@ class VehicleSupervision:
             text = f"mode changed to {name} by someone else (expected {expected})"
         self._raise_fault(VehicleFault(self.url, text, took_over=True))
 
+    def _distress_fault(self, fault: asyncio.Future[MavlinkError]) -> None:
+        """The system state turned CRITICAL/EMERGENCY during the action ``fault`` belongs
+        to (one already in distress when it began is the action's starting point)."""
+        state = DISTRESS.get(self.telemetry.system_status or 0)
+        if state is None or fault is not self._fault:
+            return  # cleared meanwhile, or that action is over
+        failsafe = self._recent_failsafe()
+        note = f", failsafe: {failsafe.text!r}" if failsafe is not None else self._recent_note()
+        self._raise_fault(
+            VehicleFault(self.url, f"vehicle state {state} (HEARTBEAT){note}", took_over=True)
+        )
+
     def _check_statustext(self, entry: StatusText) -> None:
         lowered = entry.text.lower()
         if is_arming_text(entry.text):
@@ -158,9 +181,9 @@ class VehicleSupervision:
     async def supervise(self, work: Awaitable[T]) -> T:
         """Run ``work``; raise the first fault the vehicle shows while it runs.
 
-        Faults: failsafe, mode not in :attr:`expected_modes`, STATUSTEXT with
-        severity ERROR or worse, disarm while :attr:`expect_armed`, no HEARTBEAT
-        for ``heartbeat_timeout``, link closed.
+        Faults: failsafe, mode not in :attr:`expected_modes`, system state CRITICAL
+        or EMERGENCY, STATUSTEXT with severity ERROR or worse, disarm while
+        :attr:`expect_armed`, no HEARTBEAT for ``heartbeat_timeout``, link closed.
         """
         loop = asyncio.get_running_loop()
         task: asyncio.Future[T] = asyncio.ensure_future(work)

@@ -173,9 +173,9 @@ class MavlinkVehicle(VehicleSupervision):
     def _on_heartbeat(self, msg: Any) -> None:
         if msg.get_srcComponent() != self.target_component:
             return
-        was_armed = self.telemetry.armed
+        was_armed, was_status = self.telemetry.armed, self.telemetry.system_status
         self.telemetry.read_heartbeat(msg, self._now())
-        self._check_heartbeat(was_armed)
+        self._check_heartbeat(was_armed, was_status)
 
     def _on_ack(self, msg: Any) -> None:
         fut = self._acks.get(int(msg.command))

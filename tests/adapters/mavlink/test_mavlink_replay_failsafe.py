@@ -68,8 +68,8 @@ def _run(tmp_path: Path, sign: str) -> Any:
         ("battery", "failsafe: 'Battery failsafe'", FAILSAFE_AT + 0.05),
         ("radio", "failsafe: 'Radio Failsafe'", FAILSAFE_AT + 0.05),
         ("ekf", "failsafe: 'EKF Failsafe'", FAILSAFE_AT + 0.05),
-        ("critical", "vehicle state CRITICAL", FAILSAFE_AT),
-        ("emergency", "vehicle state EMERGENCY", FAILSAFE_AT),
+        ("critical", "vehicle state CRITICAL", FAILSAFE_AT + 0.3),
+        ("emergency", "vehicle state EMERGENCY", FAILSAFE_AT + 0.3),
         ("mode", "switched to RTL, which (fly copter1 pad field) does not stand for", 20.3),
     ],
 )
