@@ -40,4 +40,4 @@ def test_the_portfolio_plans_missions_and_replans_with_no_failure() -> None:
     assert stats.dishes == plain.dishes == 8
     # never longer than Kairos' first plan alone on the same orders
     assert stats.total_time_s <= plain.total_time_s + 1e-6
-    assert len(PortfolioPlanner().alternatives) == len(PORTFOLIO) == 3
+    assert len(PortfolioPlanner().alternatives) == len(PORTFOLIO) == 2
