@@ -58,9 +58,19 @@ def ground_term(term: str, bindings: Mapping[str, str]) -> str:
 
 
 def ground_args(args: tuple[str, ...], bindings: Mapping[str, str]) -> tuple[str, ...]:
-    """Replace variables by their objects; an unbound variable is an error naming it."""
+    """Replace variables by their objects; an unbound variable is an error naming it.
+
+    This runs for every atom of every condition and effect evaluated, so: a ground
+    tuple with no bindings (the executor's ground actions) is handed back as it is,
+    and otherwise a list comprehension, not a generator (each generator step is a
+    call of its own)."""
+    if not bindings and args.__class__ is tuple:
+        for a in args:
+            if a[:1] == "?":
+                raise UnboundVariableError(f"variable {a} is not bound")
+        return args
     try:
-        return tuple(bindings[a] if a[:1] == "?" else a for a in args)
+        return tuple([bindings[a] if a[:1] == "?" else a for a in args])
     except KeyError as exc:
         raise UnboundVariableError(f"variable {exc.args[0]} is not bound") from None
 

@@ -19,7 +19,7 @@ field types. A construct that can be written with older ones says so in a
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal, TypeAlias
+from typing import ClassVar, Literal, TypeAlias
 
 from plansys_bridge.errors import SourceLocation
 
@@ -119,13 +119,48 @@ NumExpr: TypeAlias = Number | FluentRef | DurationRef | BinaryOp | Negate
 # ---------------------------------------------------------------- conditions
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Atom:
-    """A predicate application; ground when no argument is a variable."""
+    """A predicate application; ground when no argument is a variable.
+
+    Its hash is worked out once, when it is made: facts are hashed over and over
+    (journaled tables, sets of facts, memos), and the generated ``__hash__`` builds
+    and hashes a tuple each time. Equality, ``repr`` and ``fields`` are the
+    dataclass's own; the kept hash is left out of pickles and copies (string hashes
+    differ from one process to the next) and worked out again when they are loaded.
+    """
 
     predicate: str
     args: tuple[Term, ...] = ()
     loc: SourceLocation | None = field(default=None, compare=False, hash=False, repr=False)
+    _hash: ClassVar[int]
+
+    def __init__(
+        self, predicate: str, args: tuple[Term, ...] = (), loc: SourceLocation | None = None
+    ) -> None:
+        # Written straight into the instance dict: a frozen dataclass's own __init__
+        # goes through object.__setattr__ once per field.
+        d = self.__dict__
+        d["predicate"] = predicate
+        d["args"] = args
+        d["loc"] = loc
+        try:
+            kept = hash((predicate, args))
+        except TypeError:  # unhashable arguments (a list): hashing fails as it always did
+            return
+        d["_hash"] = kept
+
+    def __hash__(self) -> int:
+        try:
+            return self._hash
+        except AttributeError:
+            return hash((self.predicate, self.args))
+
+    def __getstate__(self) -> dict[str, object]:
+        return {"predicate": self.predicate, "args": self.args, "loc": self.loc}
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        Atom.__init__(self, **state)  # type: ignore[arg-type]
 
     def __str__(self) -> str:
         return "(" + " ".join((self.predicate, *self.args)) + ")"
