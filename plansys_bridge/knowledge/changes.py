@@ -16,7 +16,7 @@ import threading
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import NamedTuple, Self
+from typing import Any, NamedTuple, Self
 
 from plansys_bridge.knowledge.journal import JournaledTable
 from plansys_bridge.knowledge.state import FluentKey, State
@@ -25,6 +25,8 @@ from plansys_bridge.pddl.model import Atom, Condition
 __all__ = ["ChangeTracker", "KnowledgeChange"]
 
 log = logging.getLogger("plansys_bridge.knowledge.problem_expert")
+
+_NONE: frozenset[Any] = frozenset()
 
 
 @dataclass(frozen=True)
@@ -43,6 +45,17 @@ class KnowledgeChange:
     goal: Condition | None = None
     state: State | None = field(default=None, compare=False, repr=False)
     """The snapshot right after the change (read it without taking the lock)."""
+
+    @classmethod
+    def _made(cls, **fields: Any) -> KnowledgeChange:
+        """A change with every field given, its instance dict filled at once.
+
+        Why: one is made per change, and the frozen dataclass's ``__init__`` sets
+        its eleven fields one ``object.__setattr__`` at a time (about three times
+        the cost). Equality, ``repr`` and immutability are the dataclass's own."""
+        change = object.__new__(cls)
+        change.__dict__.update(fields)
+        return change
 
 
 class _Mark(NamedTuple):
@@ -73,12 +86,16 @@ class ChangeTracker:
         self.version = 0
 
     def _mark(self) -> _Mark:
-        return _Mark(
-            self._instances.mark(),
-            self._facts.mark(),
-            self._fluents.mark(),
-            self._goal,
-            self._state,
+        # tuple.__new__ directly: the named tuple's own __new__ is a Python call.
+        return tuple.__new__(
+            _Mark,
+            (
+                self._instances.mark(),
+                self._facts.mark(),
+                self._fluents.mark(),
+                self._goal,
+                self._state,
+            ),
         )
 
     def _undo(self, mark: _Mark) -> None:
@@ -88,8 +105,7 @@ class ChangeTracker:
         self._goal = mark.goal
         self._state = mark.state
 
-    @contextmanager
-    def _change(self, reason: str, *, steps: bool = False) -> Iterator[None]:
+    def _change(self, reason: str, *, steps: bool = False) -> _Change:
         """Run a change all-or-nothing; notify once when the outermost block ends.
 
         Single operations validate everything before they touch anything, so inside
@@ -97,34 +113,7 @@ class ChangeTracker:
         that mutates as it goes (a whole problem), which is then undone on its own
         when it fails, even if the surrounding transaction carries on.
         """
-        with self._lock:
-            if self._depth:
-                if not steps:
-                    yield
-                    return
-                inner = self._mark()
-                try:
-                    yield
-                except BaseException:
-                    self._undo(inner)
-                    raise
-                return
-            start = self._mark()
-            self._depth = 1
-            try:
-                yield
-            except BaseException:
-                self._undo(start)
-                raise
-            finally:
-                self._depth = 0
-            try:
-                change = self._change_since(start, reason)
-            finally:
-                for table in (self._instances, self._facts, self._fluents):
-                    table.forget_log()
-            if change is not None:
-                self._notify(change)
+        return _Change(self, reason, steps)
 
     @contextmanager
     def transaction(self) -> Iterator[Self]:
@@ -136,7 +125,11 @@ class ChangeTracker:
         """What the tables' logs say moved since ``start``; None when nothing did."""
         added, removed = self._facts.changes_since(start.facts)
         changed_fluents, fluents_before = self._fluents.changes_since(start.fluents)
-        removed_fluents = frozenset(k for k in fluents_before if k not in self._fluents)
+        removed_fluents = (
+            frozenset([k for k in fluents_before if k not in self._fluents])
+            if fluents_before
+            else _NONE
+        )
         added_instances, removed_instances = self._instances.changes_since(start.instances)
         goal_changed = start.goal is not self._goal and start.goal != self._goal
         if not (
@@ -150,18 +143,69 @@ class ChangeTracker:
         ):
             return None
         self.version += 1
-        return KnowledgeChange(
+        return KnowledgeChange._made(
             version=self.version,
             reason=reason,
             added_instances=added_instances,
             removed_instances=removed_instances,
-            added_facts=frozenset(added),
-            removed_facts=frozenset(removed),
+            added_facts=frozenset(added) if added else _NONE,
+            removed_facts=frozenset(removed) if removed else _NONE,
             changed_fluents=changed_fluents,
             removed_fluents=removed_fluents,
             goal_changed=goal_changed,
             goal=self._goal,
             state=self._state,
+        )
+
+    def _replace_facts(self, deletes: list[Atom], adds: list[Atom], reason: str) -> None:
+        """Delete then add facts (admitted already) as one change of its own, outside
+        any transaction (the lock held).
+
+        Why: the executor applies two effects per action, and this is what nearly
+        all of them do. The tables, state, version and notice are those the same
+        change makes inside :meth:`_change`, but what moved is read off the facts
+        before the change instead of scanning three logs afterwards. Notice sets are
+        built in the order the log scan finds them (deletes first, then adds).
+        """
+        facts = self._facts
+        state = self._state
+        present = facts.keys()  # the dict's own view: no Python call per test
+        added = [a for a in adds if a not in present]
+        removed = [d for d in deletes if d in present]
+        if removed and adds:
+            kept = set(adds)
+            removed = [d for d in removed if d not in kept]
+        mark = facts.mark()
+        try:
+            facts.discard_many(deletes)
+            facts.set_many(adds, None)
+            self._state = state.with_changes(adds=adds, deletes=deletes)
+        except BaseException:
+            facts.undo(mark)
+            self._state = state
+            raise
+        finally:
+            facts.forget_log()
+        if not (added or removed):
+            return
+        self.version += 1
+        self._notify(
+            KnowledgeChange._made(
+                version=self.version,
+                reason=reason,
+                added_instances={},
+                removed_instances={},
+                # From dicts, as the log scan makes them: a set built from a dict is
+                # sized for it at once, so its iteration order differs from one
+                # built from a list.
+                added_facts=frozenset(dict.fromkeys(added)) if added else _NONE,
+                removed_facts=frozenset(dict.fromkeys(removed)) if removed else _NONE,
+                changed_fluents={},
+                removed_fluents=_NONE,
+                goal_changed=False,
+                goal=self._goal,
+                state=self._state,
+            )
         )
 
     def _notify(self, change: KnowledgeChange) -> None:
@@ -182,3 +226,58 @@ class ChangeTracker:
                     self._subscribers.remove(callback)
 
         return unsubscribe
+
+
+class _Change:
+    """One ``with tracker._change(reason)`` block (see :meth:`ChangeTracker._change`).
+
+    A class rather than a generator context manager: every change goes through
+    one, and contextlib's wrapper costs several calls more each time."""
+
+    __slots__ = ("_outer", "_reason", "_start", "_steps", "_tracker")
+
+    def __init__(self, tracker: ChangeTracker, reason: str, steps: bool) -> None:
+        self._tracker = tracker
+        self._reason = reason
+        self._steps = steps
+        self._start: _Mark | None = None
+        self._outer = False
+
+    def __enter__(self) -> None:
+        tracker = self._tracker
+        tracker._lock.acquire()
+        try:
+            if not tracker._depth:
+                self._start = tracker._mark()
+                self._outer = True
+                tracker._depth = 1
+            elif self._steps:
+                self._start = tracker._mark()
+        except BaseException:
+            tracker._lock.release()
+            raise
+
+    def __exit__(self, exc_type: type[BaseException] | None, *_exc: object) -> None:
+        tracker = self._tracker
+        start = self._start
+        try:
+            if exc_type is not None:
+                if start is not None:
+                    try:
+                        tracker._undo(start)
+                    finally:
+                        if self._outer:
+                            tracker._depth = 0
+                return
+            if not self._outer or start is None:
+                return
+            tracker._depth = 0
+            try:
+                change = tracker._change_since(start, self._reason)
+            finally:
+                for table in (tracker._instances, tracker._facts, tracker._fluents):
+                    table.forget_log()
+            if change is not None:
+                tracker._notify(change)
+        finally:
+            tracker._lock.release()

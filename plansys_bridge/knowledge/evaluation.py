@@ -13,6 +13,7 @@ per module: :mod:`.reasoner` (what each construct means), :mod:`.joins`
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping, Sequence
+from typing import NamedTuple
 
 from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.knowledge.context import EvalContext, EvaluationError, UndefinedFluentError
@@ -20,10 +21,12 @@ from plansys_bridge.knowledge.formulas import fluent_text
 from plansys_bridge.knowledge.grounding import (
     GroundAction,
     UnboundVariableError,
+    ground_args,
     normalize_bindings,
     substitute_condition,
     substitute_effect,
 )
+from plansys_bridge.knowledge.joins import CACHE_LIMIT
 from plansys_bridge.knowledge.plan_atoms import AtomWalker, effect_atoms
 from plansys_bridge.knowledge.reasoner import Changes, Reasoner
 from plansys_bridge.knowledge.state import Args, FluentKey, State
@@ -31,9 +34,13 @@ from plansys_bridge.pddl.model import (
     NO_EFFECT,
     TRUE,
     Action,
+    AddEffect,
+    And,
+    AndEffect,
     AnyAction,
     Atom,
     Condition,
+    DeleteEffect,
     Domain,
     DurativeAction,
     Effect,
@@ -50,12 +57,47 @@ __all__ = [
 ]
 
 
+def _plain_changes(effect: Effect) -> tuple[list[Atom], list[Atom]] | None:
+    """(adds, deletes) of an effect that only adds and deletes atoms, worked out
+    without an evaluation context (nothing is read from the state); None for any
+    other effect. Atoms are ground in the order the general walk takes, so an
+    unbound variable is the same error."""
+    parts = effect.effects if type(effect) is AndEffect else (effect,)
+    adds: list[Atom] = []
+    deletes: list[Atom] = []
+    no_bindings: dict[str, str] = {}
+    for part in parts:
+        if type(part) is AddEffect:
+            found = adds
+        elif type(part) is DeleteEffect:
+            found = deletes
+        else:
+            return None
+        atom = part.atom
+        found.append(Atom(atom.predicate, ground_args(atom.args, no_bindings)))
+    return adds, deletes
+
+
+class _Kept(NamedTuple):
+    """An answer of :meth:`Evaluator.changes` kept for the next call with the same question."""
+
+    effect: Effect
+    state: State
+    bindings: dict[str, str]
+    duration: float | None
+    adds: list[Atom]
+    deletes: list[Atom]
+    updates: dict[FluentKey, float]
+
+
 class Evaluator(Reasoner):
     """Evaluates conditions and applies effects of one domain (see module docs)."""
 
     def __init__(self, domain: Domain) -> None:
         super().__init__(domain)
         self._actions: dict[str, AnyAction] = {a.name: a for a in domain.actions}
+        self._kept: _Kept | None = None
+        self._plain_facts: dict[int, tuple[Condition, tuple[tuple[str, Args], ...] | None]] = {}
 
     # ================================================================= public API
 
@@ -66,9 +108,44 @@ class Evaluator(Reasoner):
         bindings: Mapping[str, str] | None = None,
         duration: float | None = None,
     ) -> bool:
-        """True when ``cond`` holds in ``state`` with ``bindings`` (``?x`` -> object)."""
-        b = normalize_bindings(bindings) if bindings else {}
+        """True when ``cond`` holds in ``state`` with ``bindings`` (``?x`` -> object).
+
+        A ground atom or conjunction of ground atoms (the executor's requirements)
+        is looked up in the state directly: its facts are listed once per condition
+        (see :meth:`_plain`), and the plan graph and the executor ask about the
+        same conditions again and again."""
+        if bindings:
+            b = normalize_bindings(bindings)
+        else:
+            entry = self._plain_facts.get(id(cond))
+            if entry is None or entry[0] is not cond:
+                entry = self._plain(cond)
+            if entry[1] is not None:
+                return state.has_all(entry[1])
+            b = {}
         return self._holds(cond, b, EvalContext(self, state, duration))
+
+    def _plain(self, cond: Condition) -> tuple[Condition, tuple[tuple[str, Args], ...] | None]:
+        """``(cond, facts)``: the (predicate, arguments) pairs that must all be facts
+        for ``cond`` to hold when it is a base atom or a conjunction of them with no
+        variable (it can then neither raise nor need an evaluation context), else
+        ``(cond, None)``; remembered per condition object."""
+        parts = cond.operands if type(cond) is And else (cond,)
+        facts: list[tuple[str, Args]] = []
+        for part in parts:
+            if (
+                type(part) is not Atom
+                or part.predicate in self._derived_rules
+                or type(part.args) is not tuple
+                or not all(type(a) is str and a[:1] != "?" for a in part.args)
+            ):
+                break
+            facts.append((part.predicate, part.args))
+        entry = (cond, tuple(facts) if len(facts) == len(parts) else None)
+        if len(self._plain_facts) > CACHE_LIMIT:
+            self._plain_facts.clear()
+        self._plain_facts[id(cond)] = entry
+        return entry
 
     def value(
         self,
@@ -98,9 +175,35 @@ class Evaluator(Reasoner):
         state: State,
         bindings: Mapping[str, str] | None = None,
         duration: float | None = None,
+        *,
+        keep: bool = False,
     ) -> tuple[list[Atom], list[Atom], dict[FluentKey, float]]:
-        """What ``effect`` would do: (adds, deletes, new fluent values), nothing applied."""
+        """What ``effect`` would do: (adds, deletes, new fluent values), nothing applied.
+
+        ``keep=True`` keeps the answer for the next call with the same effect and
+        snapshot (compared by identity; both are immutable), bindings and duration,
+        which gets it without working it out again: the executor works out what an
+        at-start effect changes (to undo it if the action is halted) and then has
+        the knowledge apply it. The kept answer is handed over once and dropped;
+        whoever keeps it must not change the lists it got.
+        """
         b = normalize_bindings(bindings) if bindings else {}
+        kept = self._kept
+        if (
+            kept is not None
+            and kept.effect is effect
+            and kept.state is state
+            and kept.duration == duration
+            and kept.bindings == b
+        ):
+            self._kept = None
+            return kept.adds, kept.deletes, kept.updates
+        plain = None if b else _plain_changes(effect)
+        if plain is not None:
+            adds, deletes = plain
+            if keep:
+                self._kept = _Kept(effect, state, b, duration, adds, deletes, {})
+            return adds, deletes, {}
         ctx = EvalContext(self, state, duration)
         gathered = Changes()
         self._collect(effect, b, ctx, gathered)
@@ -124,6 +227,8 @@ class Evaluator(Reasoner):
                 if val == 0:
                     raise EvaluationError(f"scale-down of {fluent_text(key)} by zero")
                 updates[key] = current / val
+        if keep:
+            self._kept = _Kept(effect, state, b, duration, gathered.adds, gathered.deletes, updates)
         return gathered.adds, gathered.deletes, updates
 
     def satisfying_bindings(

@@ -10,7 +10,7 @@ inserted with and a rollback that puts keys back sorts the table by it.
 
 from __future__ import annotations
 
-from collections.abc import ItemsView, Iterator, KeysView, Mapping, ValuesView
+from collections.abc import ItemsView, Iterable, Iterator, KeysView, Mapping, ValuesView
 from typing import Generic, TypeVar
 
 K = TypeVar("K")
@@ -75,13 +75,21 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
     # ------------------------------------------------------------------ writing
 
     def set(self, key: K, value: V) -> None:
-        old = self._data.get(key, MISSING)
-        self.writes += 1
-        self._log.append((key, old, self._seq.get(key, -1)))
-        if old is MISSING:
-            self._seq[key] = self._next
-            self._next += 1
-        self._data[key] = value
+        self.set_many((key,), value)
+
+    def set_many(self, keys: Iterable[K], value: V) -> None:
+        """``set(key, value)`` for each key in turn, in one call (a whole effect's facts)."""
+        data, seq, log = self._data, self._seq, self._log
+        for key in keys:
+            old = data.get(key, MISSING)
+            self.writes += 1
+            if old is MISSING:  # a key is in both dicts or in neither
+                log.append((key, old, -1))
+                seq[key] = self._next
+                self._next += 1
+            else:
+                log.append((key, old, seq[key]))
+            data[key] = value
 
     def delete(self, key: K) -> None:
         """Remove ``key`` (KeyError when absent)."""
@@ -89,8 +97,16 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
         self._log.append((key, self._data.pop(key), self._seq.pop(key)))
 
     def discard(self, key: K) -> None:
-        if key in self._data:
-            self.delete(key)
+        self.discard_many((key,))
+
+    def discard_many(self, keys: Iterable[K]) -> None:
+        """``discard(key)`` for each key in turn, in one call."""
+        data, seq, log = self._data, self._seq, self._log
+        for key in keys:
+            old = data.pop(key, MISSING)
+            if old is not MISSING:
+                self.writes += 1
+                log.append((key, old, seq.pop(key)))
 
     def clear(self) -> None:
         for key in list(self._data):

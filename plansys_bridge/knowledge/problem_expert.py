@@ -392,23 +392,31 @@ class ProblemExpert(ChangeTracker):
         bindings: Mapping[str, str] | None = None,
         duration: float | None = None,
     ) -> None:
-        """Apply an effect (PDDL semantics) as one validated, atomic change."""
-        with self._change("apply"):
+        """Apply an effect (PDDL semantics) as one validated, atomic change.
+
+        What the effect does is worked out by the evaluator, which hands over what
+        it found for the same effect and snapshot a moment ago (the executor works
+        out an at-start effect's delta just before applying it). Everything is
+        checked before anything changes; an effect of facts only, outside a
+        transaction, then takes the short way (:meth:`_replace_facts`)."""
+        with self._lock:
             adds, deletes, updates = self.evaluator.changes(effect, self._state, bindings, duration)
             version = self._instances.writes
-            checked_adds = self._admit.facts(adds, version)
-            checked_deletes = self._admit.facts(deletes, version)
+            checked_adds = self._admit.facts(adds, version) if adds else adds
+            checked_deletes = self._admit.facts(deletes, version) if deletes else deletes
             for key in updates:
                 self._admit.fluent(*key)
-            for atom in checked_deletes:
-                self._facts.discard(atom)
-            for atom in checked_adds:
-                self._facts.set(atom, None)
-            for key, number in updates.items():
-                self._fluents.set(key, number)
-            self._state = self._state.with_changes(
-                adds=checked_adds, deletes=checked_deletes, fluents=updates
-            )
+            if not updates and not self._depth:
+                self._replace_facts(checked_deletes, checked_adds, "apply")
+                return
+            with self._change("apply"):
+                self._facts.discard_many(checked_deletes)
+                self._facts.set_many(checked_adds, None)
+                for key, number in updates.items():
+                    self._fluents.set(key, number)
+                self._state = self._state.with_changes(
+                    adds=checked_adds, deletes=checked_deletes, fluents=updates
+                )
 
     # ================================================================ messages
 

@@ -110,6 +110,15 @@ class State:
     def has(self, predicate: str, args: Args) -> bool:
         return args in self._index.get(predicate, _EMPTY)
 
+    def has_all(self, facts: Iterable[tuple[str, Args]]) -> bool:
+        """True when every (predicate, arguments) pair is a fact (one call for a
+        whole conjunction)."""
+        index = self._index
+        for predicate, args in facts:  # noqa: SIM110 (all() of a generator: a call per fact)
+            if args not in index.get(predicate, _EMPTY):
+                return False
+        return True
+
     def __contains__(self, atom: object) -> bool:
         return isinstance(atom, Atom) and atom.args in self._index.get(atom.predicate, _EMPTY)
 

@@ -1,0 +1,170 @@
+"""Applying an effect of facts outside a transaction takes a short way
+(``ChangeTracker._replace_facts``); it must leave the same knowledge, notices,
+versions and errors as the general way (the same effect applied in a transaction,
+whose notice comes from scanning the tables' logs)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from plansys_bridge.errors import KnowledgeError
+from plansys_bridge.knowledge.changes import ChangeTracker, KnowledgeChange
+from plansys_bridge.knowledge.problem_expert import ProblemExpert
+from plansys_bridge.knowledge.state import State
+from plansys_bridge.pddl.model import (
+    AddEffect,
+    AndEffect,
+    Atom,
+    DeleteEffect,
+    Effect,
+    FluentRef,
+    Number,
+    NumericEffect,
+)
+from plansys_bridge.pddl.parser import parse_domain
+
+DOMAIN = parse_domain(
+    """(define (domain d) (:requirements :typing :fluents)
+      (:types thing)
+      (:predicates (p ?x - thing) (q ?x ?y - thing))
+      (:functions (level ?x - thing)))""",
+    "<d>",
+)
+OBJECTS = ("a", "b", "c")
+ATOMS = [Atom("p", (x,)) for x in OBJECTS] + [Atom("q", (x, y)) for x in OBJECTS for y in "ab"]
+
+
+def _knowledge(initial: list[Atom]) -> tuple[ProblemExpert, list[KnowledgeChange]]:
+    k = ProblemExpert(DOMAIN)
+    for name in OBJECTS:
+        k.add_instance(name, "thing")
+    for atom in initial:
+        k.add_predicate(atom)
+    k.set_function("(= (level a) 1)")
+    seen: list[KnowledgeChange] = []
+    k.subscribe(seen.append)
+    return k, seen
+
+
+def _observed(k: ProblemExpert, seen: list[KnowledgeChange]) -> tuple[object, ...]:
+    notices = [
+        (
+            dataclasses.replace(c, reason="-"),
+            list(c.added_facts),  # iteration order too: subscribers may publish it
+            list(c.removed_facts),
+            c.state,
+        )
+        for c in seen
+    ]
+    return k.get_predicates(), k.state(), k.version, k.get_functions(), notices
+
+
+_EFFECTS = st.lists(st.tuples(st.booleans(), st.sampled_from(ATOMS)), max_size=8).map(
+    lambda parts: AndEffect(tuple(AddEffect(a) if add else DeleteEffect(a) for add, a in parts))
+)
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    initial=st.lists(st.sampled_from(ATOMS), unique=True), effects=st.lists(_EFFECTS, max_size=3)
+)
+def test_the_short_way_leaves_what_the_general_way_leaves(
+    initial: list[Atom], effects: list[Effect]
+) -> None:
+    short, short_seen = _knowledge(initial)
+    general, general_seen = _knowledge(initial)
+    for effect in effects:
+        short.apply(effect)
+        with general.transaction():
+            general.apply(effect)
+    assert _observed(short, short_seen) == _observed(general, general_seen)
+
+
+def test_an_effect_of_facts_takes_the_short_way(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Guards the comparison above: outside a transaction the logs are not scanned."""
+    k, seen = _knowledge([Atom("p", ("a",))])
+    scans: list[str] = []
+    original = ChangeTracker._change_since
+
+    def counted(self: ChangeTracker, start: object, reason: str) -> KnowledgeChange | None:
+        scans.append(reason)
+        return original(self, start, reason)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(ChangeTracker, "_change_since", counted)
+    k.apply(AndEffect((DeleteEffect(Atom("p", ("a",))), AddEffect(Atom("p", ("b",))))))
+    assert scans == [] and [c.reason for c in seen] == ["apply"]
+    assert seen[0].removed_facts == {Atom("p", ("a",))}
+    assert seen[0].added_facts == {Atom("p", ("b",))}
+
+
+def test_numeric_effects_go_the_general_way() -> None:
+    k, seen = _knowledge([])
+    k.apply(
+        AndEffect(
+            (
+                AddEffect(Atom("p", ("a",))),
+                NumericEffect("increase", FluentRef("level", ("a",)), Number(2.0)),
+            )
+        )
+    )
+    assert k.get_function("level", ("a",)) == 3.0
+    assert [(c.reason, dict(c.changed_fluents), set(c.added_facts)) for c in seen] == [
+        ("apply", {("level", ("a",)): 3.0}, {Atom("p", ("a",))})
+    ]
+
+
+def test_a_bad_effect_changes_nothing_either_way() -> None:
+    bad = AndEffect((DeleteEffect(Atom("p", ("a",))), AddEffect(Atom("p", ("zed",)))))
+    for in_transaction in (False, True):
+        k, seen = _knowledge([Atom("p", ("a",))])
+        before = _observed(k, seen)
+        with pytest.raises(KnowledgeError, match=r"predicate \(p zed\): unknown object 'zed'"):
+            if in_transaction:
+                with k.transaction():
+                    k.apply(bad)
+            else:
+                k.apply(bad)
+        assert _observed(k, seen) == before
+
+
+def test_a_failure_half_way_is_undone(monkeypatch: pytest.MonkeyPatch) -> None:
+    k, seen = _knowledge([Atom("p", ("a",)), Atom("p", ("b",)), Atom("p", ("c",))])
+    before = _observed(k, seen)
+    state = k.state()
+
+    def broken(self: State, *args: object, **kwargs: object) -> State:
+        raise RuntimeError("out of memory")
+
+    monkeypatch.setattr(State, "with_changes", broken)
+    with pytest.raises(RuntimeError, match="out of memory"):
+        k.apply(AndEffect((DeleteEffect(Atom("p", ("a",))), AddEffect(Atom("q", ("a", "b"))))))
+    monkeypatch.undo()
+    assert _observed(k, seen) == before and k.state() is state
+    k.apply(AndEffect((DeleteEffect(Atom("p", ("b",))),)))
+    assert k.get_predicates() == [Atom("p", ("a",)), Atom("p", ("c",))]
+    assert [c.version for c in seen] == [k.version]
+
+
+def test_a_notice_made_at_once_equals_one_made_field_by_field() -> None:
+    fields = {
+        "version": 3,
+        "reason": "apply",
+        "added_instances": {"a": "thing"},
+        "removed_instances": {},
+        "added_facts": frozenset({Atom("p", ("a",))}),
+        "removed_facts": frozenset(),
+        "changed_fluents": {("level", ("a",)): 2.0},
+        "removed_fluents": frozenset(),
+        "goal_changed": False,
+        "goal": None,
+        "state": State(),
+    }
+    assert set(fields) == {f.name for f in dataclasses.fields(KnowledgeChange)}
+    made = KnowledgeChange._made(**fields)
+    assert made == KnowledgeChange(**fields) and repr(made) == repr(KnowledgeChange(**fields))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        made.version = 4  # type: ignore[misc]

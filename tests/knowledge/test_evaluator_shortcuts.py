@@ -1,0 +1,182 @@
+"""The evaluator's short ways agree with its general ones: ground atoms and
+conjunctions looked up in the state directly, effects of facts gathered without
+an evaluation context, and an at-start effect's changes handed over once."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from plansys_bridge.knowledge import evaluation
+from plansys_bridge.knowledge.context import EvalContext
+from plansys_bridge.knowledge.evaluation import Evaluator
+from plansys_bridge.knowledge.reasoner import Changes
+from plansys_bridge.knowledge.state import State
+from plansys_bridge.pddl.model import (
+    AddEffect,
+    And,
+    AndEffect,
+    Atom,
+    Compare,
+    Condition,
+    DeleteEffect,
+    Effect,
+    FluentRef,
+    Not,
+    Number,
+    NumericEffect,
+    WhenEffect,
+)
+from plansys_bridge.pddl.parser import parse_domain
+
+DOMAIN = parse_domain(
+    """(define (domain d) (:requirements :typing :fluents :derived-predicates)
+      (:types thing)
+      (:predicates (p ?x - thing) (q ?x ?y - thing) (r ?x - thing))
+      (:functions (level ?x - thing))
+      (:derived (r ?x - thing) (p ?x)))""",
+    "<d>",
+)
+OBJECTS = {"a": "thing", "b": "thing"}
+TERMS = st.sampled_from(["a", "b", "?x"])
+ATOMS = st.one_of(
+    st.builds(lambda t: Atom("p", (t,)), TERMS),
+    st.builds(lambda t, u: Atom("q", (t, u)), TERMS, TERMS),
+    st.builds(lambda t: Atom("r", (t,)), TERMS),
+)
+LEAVES = st.one_of(
+    ATOMS,
+    st.builds(lambda t: Compare(">", FluentRef("level", (t,)), Number(1.0)), TERMS),
+)
+CONDITIONS = st.one_of(
+    LEAVES,
+    st.lists(LEAVES, max_size=4).map(lambda ops: And(tuple(ops))),
+    st.lists(st.one_of(LEAVES, LEAVES.map(Not)), max_size=3).map(lambda ops: And(tuple(ops))),
+)
+FACTS = [Atom("p", (x,)) for x in "ab"] + [Atom("q", (x, y)) for x in "ab" for y in "ab"]
+STATES = st.builds(
+    lambda facts, level: State(facts, {} if level is None else {("level", ("a",)): level}, OBJECTS),
+    st.lists(st.sampled_from(FACTS)),
+    st.none() | st.floats(0, 3),
+)
+
+
+def _outcome(run: object) -> tuple[str, object]:
+    try:
+        return "value", run()  # type: ignore[operator]
+    except Exception as exc:  # the same error, whichever way
+        return type(exc).__name__, str(exc)
+
+
+@settings(max_examples=300, deadline=None)
+@given(cond=CONDITIONS, state=STATES)
+def test_holds_agrees_with_the_general_evaluation(cond: Condition, state: State) -> None:
+    ev = Evaluator(DOMAIN)
+    general = _outcome(lambda: ev._holds(cond, {}, EvalContext(ev, state, None)))
+    assert _outcome(lambda: ev.holds(cond, state)) == general
+    assert _outcome(lambda: ev.holds(cond, state)) == general  # remembered, same answer
+
+
+def test_plain_conditions_are_the_ones_looked_up_directly() -> None:
+    ev = Evaluator(DOMAIN)
+    assert ev._plain(And((Atom("p", ("a",)), Atom("q", ("a", "b")))))[1] == (
+        ("p", ("a",)),
+        ("q", ("a", "b")),
+    )
+    assert ev._plain(Atom("p", ("a",)))[1] == (("p", ("a",)),)
+    assert ev._plain(And(()))[1] == ()
+    for other in (Atom("r", ("a",)), Atom("p", ("?x",)), And((Not(Atom("p", ("a",))),))):
+        assert ev._plain(other)[1] is None
+
+
+def test_a_remembered_condition_is_told_apart_by_identity() -> None:
+    ev = Evaluator(DOMAIN)
+    state = State([Atom("p", ("a",))], {}, OBJECTS)
+    asked = Atom("p", ("b",))
+    # Another condition once lived at this id: its facts must not be used.
+    ev._plain_facts[id(asked)] = (Atom("p", ("a",)), (("p", ("a",)),))
+    assert not ev.holds(asked, state)
+    assert ev.holds(Atom("p", ("a",)), state)
+
+
+_EFFECT_PARTS = st.tuples(st.booleans(), ATOMS).map(
+    lambda t: AddEffect(t[1]) if t[0] else DeleteEffect(t[1])
+)
+EFFECTS = st.one_of(
+    _EFFECT_PARTS,
+    st.lists(_EFFECT_PARTS, max_size=5).map(lambda es: AndEffect(tuple(es))),
+    st.lists(
+        st.one_of(_EFFECT_PARTS, ATOMS.map(lambda a: WhenEffect(Atom("p", ("a",)), AddEffect(a)))),
+        max_size=4,
+    ).map(lambda es: AndEffect(tuple(es))),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(effect=EFFECTS, state=STATES)
+def test_changes_agree_with_the_general_walk(effect: Effect, state: State) -> None:
+    ev = Evaluator(DOMAIN)
+
+    def general() -> tuple[list[Atom], list[Atom], dict[object, float]]:
+        gathered = Changes()
+        ev._collect(effect, {}, EvalContext(ev, state, None), gathered)
+        return gathered.adds, gathered.deletes, {}
+
+    assert _outcome(lambda: ev.changes(effect, state)) == _outcome(general)
+
+
+def test_facts_only_effects_skip_the_walk(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Guards the comparison above against a short way that is never taken."""
+    ev = Evaluator(DOMAIN)
+    walked: list[Effect] = []
+    collect = ev._collect
+    monkeypatch.setattr(ev, "_collect", lambda e, *rest: (walked.append(e), collect(e, *rest)))
+    state = State([], {}, OBJECTS)
+    plain = AndEffect((AddEffect(Atom("p", ("a",))), DeleteEffect(Atom("p", ("b",)))))
+    assert ev.changes(plain, state)[:2] == ([Atom("p", ("a",))], [Atom("p", ("b",))])
+    assert walked == []
+    when = WhenEffect(Atom("p", ("a",)), AddEffect(Atom("p", ("b",))))
+    ev.changes(when, state)
+    assert walked == [when]
+
+
+NUMERIC = AndEffect(
+    (
+        DeleteEffect(Atom("p", ("a",))),
+        NumericEffect("increase", FluentRef("level", ("a",)), Number(2.0)),
+    )
+)
+
+
+@pytest.mark.parametrize("effect", [NUMERIC, AndEffect((AddEffect(Atom("p", ("b",))),))])
+def test_kept_changes_are_handed_over_once(effect: Effect, monkeypatch: pytest.MonkeyPatch) -> None:
+    ev = Evaluator(DOMAIN)
+    state = State([Atom("p", ("a",))], {("level", ("a",)): 1.0}, OBJECTS)
+    worked: list[int] = []  # one entry each time the changes are worked out, either way
+    plain = evaluation._plain_changes
+    monkeypatch.setattr(evaluation, "_plain_changes", lambda e: (worked.append(1), plain(e))[1])
+    collect = ev._collect
+    monkeypatch.setattr(ev, "_collect", lambda *args: (worked.append(1), collect(*args))[1])
+    first = ev.changes(effect, state, {}, 4.0, keep=True)
+    once = len(worked)
+    assert ev.changes(effect, state, None, 4.0) == first and len(worked) == once
+    again = ev.changes(effect, state, None, 4.0)  # handed over once: worked out anew
+    assert again == first and again[0] is not first[0] and len(worked) > once
+    # a different snapshot, duration or bindings is a different question
+    ev.changes(effect, state, {}, 4.0, keep=True)
+    for other in (
+        (effect, State([Atom("p", ("a",))], {("level", ("a",)): 1.0}, OBJECTS), None, 4.0),
+        (effect, state, None, 5.0),
+        (effect, state, {"x": "a"}, 4.0),
+    ):
+        before = len(worked)
+        assert ev.changes(*other) == first  # type: ignore[arg-type]
+        assert len(worked) > before
+
+
+def test_has_all_is_every_fact() -> None:
+    state = State([Atom("p", ("a",)), Atom("q", ("a", "b"))], {}, OBJECTS)
+    assert state.has_all([("p", ("a",)), ("q", ("a", "b"))]) and state.has_all([])
+    assert not state.has_all([("p", ("a",)), ("q", ("b", "a"))])
+    assert not state.has_all([("nothing", ())])
