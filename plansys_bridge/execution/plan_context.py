@@ -58,13 +58,18 @@ class EffectDelta:
         bindings: Mapping[str, str],
         duration: float | None,
     ) -> EffectDelta:
-        adds, deletes, updates = evaluator.changes(effect, state, bindings, duration)
+        """What ``effect`` changes in ``state``; the evaluator keeps its answer for
+        the knowledge's ``apply`` of the same effect on the same snapshot, which
+        usually follows at once (the effect is worked out once, not twice)."""
+        adds, deletes, updates = evaluator.changes(effect, state, bindings, duration, keep=True)
+        if not (adds or deletes or updates):
+            return cls()
         add_set = set(adds)
         return cls(
-            added=tuple(a for a in add_set if a not in state),
-            deleted=tuple(d for d in set(deletes) - add_set if d in state),
+            added=tuple([a for a in add_set if a not in state]),
+            deleted=tuple([d for d in set(deletes) - add_set if d in state]),
             fluents=tuple(
-                (k, state.value(*k), v) for k, v in updates.items() if state.value(*k) != v
+                [(k, state.value(*k), v) for k, v in updates.items() if state.value(*k) != v]
             ),
         )
 
@@ -197,6 +202,10 @@ class PlanContext:
         self.resting: set[int] = set()
         """Branches whose performer works and that nothing has touched since."""
         self._reads: dict[int, frozenset[str] | None] = {}
+        self._readers: dict[str, set[int]] = {}
+        """For each name some resting branch's over-all reads, those branches: a
+        change then finds the branches it wakes by its names, whatever the number
+        of resting branches."""
         self.unfinished = len(self.actions)
         self._deadlines: list[tuple[float, int]] = []
         """(mission time, index of the action to wake or -1) as a heap."""
@@ -242,7 +251,7 @@ class PlanContext:
         return self.knowledge.state()
 
     def holds(self, rt: ActionRuntime, cond: Condition) -> bool:
-        return self.evaluator.holds(cond, self.state(), GROUND, rt.step.duration)
+        return self.evaluator.holds(cond, self.knowledge.state(), GROUND, rt.step.duration)
 
     def unmet(self, rt: ActionRuntime, cond: Condition) -> str:
         """The conjuncts of ``cond`` that do not hold now, as ground PDDL text."""
@@ -294,15 +303,31 @@ class PlanContext:
         """Stop ticking a standard branch whose performer is at work until the
         performer ends (:meth:`resume`), a deadline passes or the knowledge its
         over-all requirement reads changes (:meth:`knowledge_changed`)."""
-        if not rt.may_rest or self._over_all_reads(rt) is None:
+        if not rt.may_rest:
+            return
+        reads = self._over_all_reads(rt)
+        if reads is None:
             return
         self.active.discard(rt.index)
-        self.resting.add(rt.index)
+        if rt.index not in self.resting:
+            self.resting.add(rt.index)
+            for name in reads:
+                self._readers.setdefault(name, set()).add(rt.index)
 
     def resume(self, index: int) -> None:
         if index in self.resting:
-            self.resting.discard(index)
+            self._stop_resting(index)
             self.activate(index)
+
+    def _stop_resting(self, index: int) -> None:
+        if index not in self.resting:
+            return
+        self.resting.discard(index)
+        for name in self._reads[index] or ():
+            readers = self._readers[name]
+            readers.discard(index)
+            if not readers:
+                del self._readers[name]
 
     def knowledge_changed(self, change: KnowledgeChange) -> None:
         """Give a tick to the resting branches whose over-all requirement reads
@@ -310,17 +335,22 @@ class PlanContext:
         if not self.resting:
             return
         if change.added_instances or change.removed_instances:
-            self._wake_resting(lambda _i: True)
-            return
-        names = {a.predicate for a in change.added_facts}
-        names.update(a.predicate for a in change.removed_facts)
-        names.update(k[0] for k in change.changed_fluents)
-        names.update(k[0] for k in change.removed_fluents)
-        if names:
-            self._wake_resting(lambda i: not names.isdisjoint(self._reads[i] or ()))
-
-    def _wake_resting(self, touched: Callable[[int], bool]) -> None:
-        for index in [i for i in self.resting if touched(i)]:
+            woken = set(self.resting)
+        else:
+            # Plain loops over the change (a few facts), not over the branches.
+            readers = self._readers
+            woken = set()
+            for facts in (change.added_facts, change.removed_facts):
+                for atom in facts:
+                    found = readers.get(atom.predicate)
+                    if found:
+                        woken.update(found)
+            for keys in (change.changed_fluents, change.removed_fluents):
+                for key in keys:
+                    found = readers.get(key[0])
+                    if found:
+                        woken.update(found)
+        for index in woken:
             self.resume(index)
 
     def _over_all_reads(self, rt: ActionRuntime) -> frozenset[str] | None:
@@ -397,7 +427,7 @@ class PlanContext:
         rt.finished = True
         self.unfinished -= 1
         self.active.discard(rt.index)
-        self.resting.discard(rt.index)
+        self._stop_resting(rt.index)
         self._moved(rt)
         rec = rt.record
         self.progress = self.changed = True
@@ -429,7 +459,7 @@ class PlanContext:
         rt.finished = True
         self.unfinished -= 1
         self.active.discard(rt.index)
-        self.resting.discard(rt.index)
+        self._stop_resting(rt.index)
         self.changed = True
         if rt.start_reached and not rt.end_reached:
             rt.record.status = ActionStatus.CANCELLED
