@@ -66,11 +66,13 @@ class EffectDelta:
             return cls()
         add_set = set(adds)
         return cls(
-            added=tuple([a for a in add_set if a not in state]),
-            deleted=tuple([d for d in set(deletes) - add_set if d in state]),
+            added=tuple([a for a in add_set if a not in state]) if adds else (),
+            deleted=tuple([d for d in set(deletes) - add_set if d in state]) if deletes else (),
             fluents=tuple(
                 [(k, state.value(*k), v) for k, v in updates.items() if state.value(*k) != v]
-            ),
+            )
+            if updates
+            else (),
         )
 
     @property

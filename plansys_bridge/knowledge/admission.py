@@ -35,7 +35,7 @@ class Admission:
         self._types = domain_expert.types
         self._object_type = object_type
         self._goal_check = _GoalCheck(self)
-        self._admitted: dict[Atom, Atom] = {}
+        self._admitted: dict[tuple[str, tuple[str, ...]], Atom] = {}
         self._admitted_at = -1
 
     def check_args(
@@ -82,11 +82,14 @@ class Admission:
         admitted = self._admitted
         out: list[Atom] = []
         for atom in atoms:
-            checked = admitted.get(atom)
+            # Keyed by (predicate, arguments): a tuple hashes and compares in C, an
+            # atom through its Python __hash__ and __eq__.
+            key = (atom.predicate, atom.args)
+            checked = admitted.get(key)
             if checked is None:
                 checked = self.fact(atom)
                 if len(admitted) < _ADMITTED_LIMIT:
-                    admitted[atom] = checked
+                    admitted[key] = checked
             out.append(checked)
         return out
 

@@ -163,22 +163,18 @@ class ChangeTracker:
 
         Why: the executor applies two effects per action, and this is what nearly
         all of them do. The tables, state, version and notice are those the same
-        change makes inside :meth:`_change`, but what moved is read off the facts
-        before the change instead of scanning three logs afterwards. Notice sets are
-        built in the order the log scan finds them (deletes first, then adds).
+        change makes inside :meth:`_change`, but what moved is what the table's
+        writes report instead of a scan of three logs afterwards. The notice's sets
+        are built from dicts in the order the scan finds them, as the scan does (a
+        frozenset built from a dict is sized for it at once, so its iteration order
+        differs from one built from a list).
         """
         facts = self._facts
         state = self._state
-        present = facts.keys()  # the dict's own view: no Python call per test
-        added = [a for a in adds if a not in present]
-        removed = [d for d in deletes if d in present]
-        if removed and adds:
-            kept = set(adds)
-            removed = [d for d in removed if d not in kept]
         mark = facts.mark()
         try:
-            facts.discard_many(deletes)
-            facts.set_many(adds, None)
+            removed = facts.discard_many(deletes)
+            added = facts.set_many(adds, None)
             self._state = state.with_changes(adds=adds, deletes=deletes)
         except BaseException:
             facts.undo(mark)
@@ -186,6 +182,11 @@ class ChangeTracker:
             raise
         finally:
             facts.forget_log()
+        if removed and added:  # deleted, then added again: there before and after
+            again = removed.keys() & added.keys()
+            if again:
+                removed = {k: None for k in removed if k not in again}
+                added = {k: None for k in added if k not in again}
         if not (added or removed):
             return
         self.version += 1
@@ -195,11 +196,8 @@ class ChangeTracker:
                 reason=reason,
                 added_instances={},
                 removed_instances={},
-                # From dicts, as the log scan makes them: a set built from a dict is
-                # sized for it at once, so its iteration order differs from one
-                # built from a list.
-                added_facts=frozenset(dict.fromkeys(added)) if added else _NONE,
-                removed_facts=frozenset(dict.fromkeys(removed)) if removed else _NONE,
+                added_facts=frozenset(added) if added else _NONE,
+                removed_facts=frozenset(removed) if removed else _NONE,
                 changed_fluents={},
                 removed_fluents=_NONE,
                 goal_changed=False,

@@ -120,8 +120,9 @@ class Evaluator(Reasoner):
             entry = self._plain_facts.get(id(cond))
             if entry is None or entry[0] is not cond:
                 entry = self._plain(cond)
-            if entry[1] is not None:
-                return state.has_all(entry[1])
+            facts = entry[1]
+            if facts is not None:
+                return not facts or state.has_all(facts)
             b = {}
         return self._holds(cond, b, EvalContext(self, state, duration))
 

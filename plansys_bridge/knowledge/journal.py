@@ -77,19 +77,25 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
     def set(self, key: K, value: V) -> None:
         self.set_many((key,), value)
 
-    def set_many(self, keys: Iterable[K], value: V) -> None:
-        """``set(key, value)`` for each key in turn, in one call (a whole effect's facts)."""
+    def set_many(self, keys: Iterable[K], value: V) -> dict[K, None]:
+        """``set(key, value)`` for each key in turn, in one call (a whole effect's
+        facts); returns the keys that were not in the table, in order."""
         data, seq, log = self._data, self._seq, self._log
+        new: dict[K, None] = {}
         for key in keys:
-            old = data.get(key, MISSING)
+            size = len(data)
+            old = data.setdefault(key, value)  # one lookup to read and, if new, write
             self.writes += 1
-            if old is MISSING:  # a key is in both dicts or in neither
-                log.append((key, old, -1))
+            if len(data) != size:  # it was not there (nor in _seq: both or neither)
+                log.append((key, MISSING, -1))
                 seq[key] = self._next
                 self._next += 1
+                new[key] = None
             else:
                 log.append((key, old, seq[key]))
-            data[key] = value
+                if old is not value:
+                    data[key] = value
+        return new
 
     def delete(self, key: K) -> None:
         """Remove ``key`` (KeyError when absent)."""
@@ -99,14 +105,18 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
     def discard(self, key: K) -> None:
         self.discard_many((key,))
 
-    def discard_many(self, keys: Iterable[K]) -> None:
-        """``discard(key)`` for each key in turn, in one call."""
+    def discard_many(self, keys: Iterable[K]) -> dict[K, None]:
+        """``discard(key)`` for each key in turn, in one call; returns the keys that
+        were in the table, in order."""
         data, seq, log = self._data, self._seq, self._log
+        gone: dict[K, None] = {}
         for key in keys:
             old = data.pop(key, MISSING)
             if old is not MISSING:
                 self.writes += 1
                 log.append((key, old, seq.pop(key)))
+                gone[key] = None
+        return gone
 
     def clear(self) -> None:
         for key in list(self._data):

@@ -1,0 +1,41 @@
+"""JournaledTable.set_many / discard_many: the same table, log and undo as one
+set or discard per key, and they report the keys that came and went, in order."""
+
+from __future__ import annotations
+
+from hypothesis import given
+from hypothesis import strategies as st
+
+from plansys_bridge.knowledge.journal import JournaledTable
+
+_KEYS = st.lists(st.sampled_from("abcdef"), max_size=8)
+
+
+def _table(keys: list[str]) -> JournaledTable[str, int]:
+    table: JournaledTable[str, int] = JournaledTable()
+    for i, key in enumerate(keys):
+        table.set(key, i)
+    return table
+
+
+@given(before=_KEYS, gone=_KEYS, came=_KEYS, value=st.integers(0, 2))
+def test_many_at_once_is_one_at_a_time(
+    before: list[str], gone: list[str], came: list[str], value: int
+) -> None:
+    many, single = _table(before), _table(before)
+    start = list(many.items())
+    mark = many.mark()
+    present = set(many)
+    removed = many.discard_many(gone)
+    assert list(removed) == [k for k in dict.fromkeys(gone) if k in present]
+    present -= set(removed)
+    new = many.set_many(came, value)
+    assert list(new) == [k for k in dict.fromkeys(came) if k not in present]
+    for key in gone:
+        single.discard(key)
+    for key in came:
+        single.set(key, value)
+    assert list(many.items()) == list(single.items()) and many.writes == single.writes
+    assert many.changes_since(mark) == single.changes_since(mark)
+    many.undo(mark)
+    assert list(many.items()) == start
