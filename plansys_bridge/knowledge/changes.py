@@ -169,19 +169,9 @@ class ChangeTracker:
         frozenset built from a dict is sized for it at once, so its iteration order
         differs from one built from a list).
         """
-        facts = self._facts
-        state = self._state
-        mark = facts.mark()
-        try:
-            removed = facts.discard_many(deletes)
-            added = facts.set_many(adds, None)
-            self._state = state.with_changes(adds=adds, deletes=deletes)
-        except BaseException:
-            facts.undo(mark)
-            self._state = state
-            raise
-        finally:
-            facts.forget_log()
+        state = self._state.with_changes(adds=adds, deletes=deletes)  # touches nothing
+        removed, added = self._facts.swap(deletes, adds, None)  # all or nothing
+        self._state = state
         if removed and added:  # deleted, then added again: there before and after
             again = removed.keys() & added.keys()
             if again:

@@ -118,6 +118,23 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
                 gone[key] = None
         return gone
 
+    def swap(
+        self, gone: Iterable[K], came: Iterable[K], value: V
+    ) -> tuple[dict[K, None], dict[K, None]]:
+        """``discard_many(gone)`` then ``set_many(came, value)`` as one step, all or
+        nothing, that leaves the log as it was: for a change complete in itself,
+        which nothing will undo or scan later. Returns (keys that went, keys that
+        were not there)."""
+        mark = len(self._log)
+        try:
+            removed = self.discard_many(gone)
+            new = self.set_many(came, value)
+        except BaseException:
+            self.undo(mark)
+            raise
+        del self._log[mark:]
+        return removed, new
+
     def clear(self) -> None:
         for key in list(self._data):
             self.delete(key)

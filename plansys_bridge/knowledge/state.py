@@ -56,24 +56,6 @@ class State:
         self._cache: dict[Any, Any] = {}
         self._object_cache: dict[Any, Any] = {}
 
-    @classmethod
-    def _build(
-        cls,
-        index: dict[str, frozenset[Args]],
-        fluents: dict[str, dict[Args, float]],
-        objects: dict[str, str],
-        object_cache: dict[Any, Any],
-    ) -> State:
-        state = cls.__new__(cls)
-        state._index = index
-        state._facts = None
-        state._fluents = fluents
-        state._flat = None
-        state._objects = objects
-        state._cache = {}
-        state._object_cache = object_cache
-        return state
-
     # ------------------------------------------------------------ reading
 
     @property
@@ -204,7 +186,16 @@ class State:
             new_objects, object_cache = dict(objects), {}
         if new_index is index and new_fluents is self._fluents and objects is None:
             return self
-        return State._build(new_index, new_fluents, new_objects, object_cache)
+        # Built here rather than through __init__, which regroups every fact.
+        state = State.__new__(State)
+        state._index = new_index
+        state._facts = None
+        state._fluents = new_fluents
+        state._flat = None
+        state._objects = new_objects
+        state._cache = {}
+        state._object_cache = object_cache
+        return state
 
     # ------------------------------------------------------------ comparing
 

@@ -3,6 +3,9 @@ set or discard per key, and they report the keys that came and went, in order.""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -39,3 +42,28 @@ def test_many_at_once_is_one_at_a_time(
     assert many.changes_since(mark) == single.changes_since(mark)
     many.undo(mark)
     assert list(many.items()) == start
+
+
+@given(before=_KEYS, gone=_KEYS, came=_KEYS)
+def test_swap_is_both_in_turn_and_leaves_no_log(
+    before: list[str], gone: list[str], came: list[str]
+) -> None:
+    swapped, stepped = _table(before), _table(before)
+    swapped.forget_log()
+    assert swapped.swap(gone, came, 7) == (stepped.discard_many(gone), stepped.set_many(came, 7))
+    assert list(swapped.items()) == list(stepped.items())
+    assert swapped.mark() == 0 and swapped.writes == stepped.writes
+
+
+def test_a_swap_that_fails_half_way_puts_everything_back() -> None:
+    table = _table(["a", "b", "c"])
+    start = list(table.items())
+    mark = table.mark()
+
+    def keys() -> Iterator[str]:
+        yield "d"
+        raise RuntimeError("broken iterator")
+
+    with pytest.raises(RuntimeError, match="broken iterator"):
+        table.swap(["a", "c"], keys(), 9)
+    assert list(table.items()) == start and table.mark() == mark
