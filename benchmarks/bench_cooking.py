@@ -14,7 +14,7 @@ For every seed below the paper, the bound its dishes allow is printed too: each
 mission takes at least max(work / robots, 33.6 s), the work being the summed time
 of the actions it executed and 33.6 s the shortest dish (one move, one transport,
 one cook); the efficiency at that bound says whether the plan or the world is the
-limit.
+limit. A failed mission is listed with its seed and the reason the run gave.
 
     python benchmarks/bench_cooking.py [--seeds 8] [--hours 0.25] [--clock virtual|wall]
         [--time-scale 0.05] [--robots 1 2 3]
@@ -40,6 +40,7 @@ class Seed:
     missions: int = 0
     replans: int = 0
     failures: int = 0
+    failure_reasons: dict[str, int] = field(default_factory=dict)
     planning_s: float = 0.0
     work: list[float] = field(default_factory=list)
     """Summed action time of each mission."""
@@ -69,6 +70,7 @@ def run_seed(robots: int, seed: int, args: argparse.Namespace) -> Seed:
     out.efficiency = stats.efficiency_percent
     out.missions, out.replans, out.failures = stats.missions, stats.replans, stats.failures
     out.planning_s = stats.planning_s
+    out.failure_reasons = stats.failure_reasons
     return out
 
 
@@ -90,6 +92,7 @@ def main() -> None:
         f"{'missions':>8} {'replans':>7} {'fail':>4} {'plan ms':>7}"
     )
     below: list[str] = []
+    failed: list[str] = []
     for robots in args.robots:
         seeds = [run_seed(robots, s, args) for s in range(1, args.seeds + 1)]
         effs = [s.efficiency for s in seeds]
@@ -109,6 +112,13 @@ def main() -> None:
                     f"  {robots} robot(s), seed {s.seed}: {s.efficiency:.2f}% "
                     f"(its dishes allow at most {s.bound_percent(robots):.2f}%)"
                 )
+            failed += [
+                f"  {robots} robot(s), seed {s.seed}: {n} x {reason}"
+                for reason, n in s.failure_reasons.items()
+            ]
+    if failed:
+        print("failed missions:")
+        print("\n".join(failed))
     if below:
         print("seeds below the paper, with the bound their dishes allow:")
         print("\n".join(below))
