@@ -169,7 +169,7 @@ class ChangeTracker:
         frozenset built from a dict is sized for it at once, so its iteration order
         differs from one built from a list).
         """
-        state = self._state.with_changes(adds=adds, deletes=deletes)  # touches nothing
+        state = self._state.with_facts(deletes, adds)  # touches nothing
         removed, added = self._facts.swap(deletes, adds, None)  # all or nothing
         self._state = state
         if removed and added:  # deleted, then added again: there before and after

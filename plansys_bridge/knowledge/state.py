@@ -11,7 +11,7 @@ computed once per snapshot.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from types import MappingProxyType
 from typing import Any, TypeAlias
 
@@ -23,6 +23,9 @@ FluentKey: TypeAlias = tuple[str, tuple[str, ...]]
 Args: TypeAlias = tuple[str, ...]
 
 _EMPTY: frozenset[Args] = frozenset()
+
+_FEW = 4
+"""Facts up to which :meth:`State.with_facts` edits predicate sets fact by fact."""
 
 
 class State:
@@ -186,13 +189,59 @@ class State:
             new_objects, object_cache = dict(objects), {}
         if new_index is index and new_fluents is self._fluents and objects is None:
             return self
-        # Built here rather than through __init__, which regroups every fact.
+        return State._build(new_index, new_fluents, new_objects, object_cache)
+
+    def with_facts(self, deletes: Sequence[Atom], adds: Sequence[Atom]) -> State:
+        """``with_changes(adds=adds, deletes=deletes)`` for an effect's few facts.
+
+        Why: the executor applies two such effects per action. For a handful of
+        facts one frozenset operation per fact on its predicate's set costs less
+        than the general way's copy, edit and freeze; a fact in a set is copied
+        once per fact of its predicate, so more facts go the general way.
+        """
+        if len(deletes) + len(adds) > _FEW:
+            return self.with_changes(adds=adds, deletes=deletes)
+        index = self._index
+        new_index = index
+        emptied = False
+        for atom in deletes:
+            current = new_index.get(atom.predicate)
+            if current is None or atom.args not in current:
+                continue
+            if new_index is index:
+                new_index = dict(index)
+            # An emptied predicate keeps its place until the end, as in with_changes
+            # (the index's order is the order predicates() lists them in).
+            current = new_index[atom.predicate] = current.difference((atom.args,))
+            emptied = emptied or not current
+        for atom in adds:
+            current = new_index.get(atom.predicate, _EMPTY)
+            if atom.args in current:
+                continue
+            if new_index is index:
+                new_index = dict(index)
+            new_index[atom.predicate] = current.union((atom.args,))
+        if new_index is index:
+            return self
+        if emptied:
+            for pred in [p for p, tuples in new_index.items() if not tuples]:
+                del new_index[pred]
+        return State._build(new_index, self._fluents, self._objects, self._object_cache)
+
+    @staticmethod
+    def _build(
+        index: dict[str, frozenset[Args]],
+        fluents: dict[str, dict[Args, float]],
+        objects: dict[str, str],
+        object_cache: dict[Any, Any],
+    ) -> State:
+        """A state from its tables as they are (``__init__`` regroups every fact)."""
         state = State.__new__(State)
-        state._index = new_index
+        state._index = index
         state._facts = None
-        state._fluents = new_fluents
+        state._fluents = fluents
         state._flat = None
-        state._objects = new_objects
+        state._objects = objects
         state._cache = {}
         state._object_cache = object_cache
         return state

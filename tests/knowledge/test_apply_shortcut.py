@@ -139,7 +139,7 @@ def test_a_failure_half_way_is_undone(monkeypatch: pytest.MonkeyPatch) -> None:
     def broken(self: State, *args: object, **kwargs: object) -> State:
         raise RuntimeError("out of memory")
 
-    monkeypatch.setattr(State, "with_changes", broken)
+    monkeypatch.setattr(State, "with_facts", broken)
     with pytest.raises(RuntimeError, match="out of memory"):
         k.apply(AndEffect((DeleteEffect(Atom("p", ("a",))), AddEffect(Atom("q", ("a", "b"))))))
     monkeypatch.undo()
