@@ -10,7 +10,15 @@ inserted with and a rollback that puts keys back sorts the table by it.
 
 from __future__ import annotations
 
-from collections.abc import ItemsView, Iterable, Iterator, KeysView, Mapping, ValuesView
+from collections.abc import (
+    Collection,
+    ItemsView,
+    Iterable,
+    Iterator,
+    KeysView,
+    Mapping,
+    ValuesView,
+)
 from typing import Generic, TypeVar
 
 K = TypeVar("K")
@@ -119,7 +127,7 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
         return gone
 
     def swap(
-        self, gone: Iterable[K], came: Iterable[K], value: V
+        self, gone: Collection[K], came: Collection[K], value: V
     ) -> tuple[dict[K, None], dict[K, None]]:
         """``discard_many(gone)`` then ``set_many(came, value)`` as one step, all or
         nothing, that leaves the log as it was: for a change complete in itself,
@@ -127,8 +135,8 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
         were not there)."""
         mark = len(self._log)
         try:
-            removed = self.discard_many(gone)
-            new = self.set_many(came, value)
+            removed = self.discard_many(gone) if gone else {}
+            new = self.set_many(came, value) if came else {}
         except BaseException:
             self.undo(mark)
             raise

@@ -59,7 +59,9 @@ def _context() -> PlanContext:
     return ctx
 
 
-def _change(facts: list[str], fluents: list[str], removed: list[str], objects: bool) -> object:
+def _change(
+    facts: list[str], fluents: list[str], removed: list[str], objects: bool
+) -> KnowledgeChange:
     return KnowledgeChange(
         version=1,
         reason="test",
@@ -72,13 +74,12 @@ def _change(facts: list[str], fluents: list[str], removed: list[str], objects: b
 
 
 _NAME_LISTS = st.lists(st.sampled_from(NAMES), max_size=3)
+Touch = tuple[list[str], list[str], list[str], bool]
 _OPS = st.lists(
-    st.one_of(
-        st.tuples(st.just("rest"), st.integers(0, 2)),
-        st.tuples(st.just("resume"), st.integers(0, 2)),
-        st.tuples(
-            st.just("change"), st.tuples(_NAME_LISTS, _NAME_LISTS, _NAME_LISTS, st.booleans())
-        ),
+    st.tuples(
+        st.sampled_from(["rest", "resume", "change"]),
+        st.integers(0, 2),
+        st.tuples(_NAME_LISTS, _NAME_LISTS, _NAME_LISTS, st.booleans()),
     ),
     max_size=12,
 )
@@ -86,25 +87,22 @@ _OPS = st.lists(
 
 @settings(max_examples=80, deadline=None)
 @given(ops=_OPS)
-def test_a_change_wakes_the_branches_that_read_it(ops: list[tuple[str, object]]) -> None:
+def test_a_change_wakes_the_branches_that_read_it(ops: list[tuple[str, int, Touch]]) -> None:
     ctx = _context()
     resting: set[int] = set()
     active = set(ctx.active)
-    for op, arg in ops:
+    for op, index, (facts, fluents, removed, objects) in ops:
         if op == "rest":
-            assert isinstance(arg, int)
-            ctx.rest(ctx.actions[arg])
-            resting.add(arg)
-            active.discard(arg)
+            ctx.rest(ctx.actions[index])
+            resting.add(index)
+            active.discard(index)
         elif op == "resume":
-            assert isinstance(arg, int)
-            ctx.resume(arg)
-            if arg in resting:
-                resting.discard(arg)
-                active.add(arg)
+            ctx.resume(index)
+            if index in resting:
+                resting.discard(index)
+                active.add(index)
         else:
-            facts, fluents, removed, objects = arg  # type: ignore[misc]
-            ctx.knowledge_changed(_change(facts, fluents, removed, objects))  # type: ignore[arg-type]
+            ctx.knowledge_changed(_change(facts, fluents, removed, objects))
             touched = set(facts) | set(fluents) | set(removed)
             woken = {i for i in resting if objects or touched & READS[i]}
             resting -= woken

@@ -6,6 +6,7 @@ whose notice comes from scanning the tables' logs)."""
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import pytest
 from hypothesis import given, settings
@@ -150,7 +151,7 @@ def test_a_failure_half_way_is_undone(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def test_a_notice_made_at_once_equals_one_made_field_by_field() -> None:
-    fields = {
+    fields: dict[str, Any] = {
         "version": 3,
         "reason": "apply",
         "added_instances": {"a": "thing"},

@@ -4,6 +4,8 @@ an evaluation context, and an at-start effect's changes handed over once."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -131,7 +133,12 @@ def test_facts_only_effects_skip_the_walk(monkeypatch: pytest.MonkeyPatch) -> No
     ev = Evaluator(DOMAIN)
     walked: list[Effect] = []
     collect = ev._collect
-    monkeypatch.setattr(ev, "_collect", lambda e, *rest: (walked.append(e), collect(e, *rest)))
+
+    def walk(effect: Effect, *rest: Any) -> None:
+        walked.append(effect)
+        collect(effect, *rest)
+
+    monkeypatch.setattr(ev, "_collect", walk)
     state = State([], {}, OBJECTS)
     plain = AndEffect((AddEffect(Atom("p", ("a",))), DeleteEffect(Atom("p", ("b",)))))
     assert ev.changes(plain, state)[:2] == ([Atom("p", ("a",))], [Atom("p", ("b",))])
@@ -155,9 +162,18 @@ def test_kept_changes_are_handed_over_once(effect: Effect, monkeypatch: pytest.M
     state = State([Atom("p", ("a",))], {("level", ("a",)): 1.0}, OBJECTS)
     worked: list[int] = []  # one entry each time the changes are worked out, either way
     plain = evaluation._plain_changes
-    monkeypatch.setattr(evaluation, "_plain_changes", lambda e: (worked.append(1), plain(e))[1])
     collect = ev._collect
-    monkeypatch.setattr(ev, "_collect", lambda *args: (worked.append(1), collect(*args))[1])
+
+    def plain_counted(effect: Effect) -> Any:
+        worked.append(1)
+        return plain(effect)
+
+    def collect_counted(*args: Any) -> None:
+        worked.append(1)
+        collect(*args)
+
+    monkeypatch.setattr(evaluation, "_plain_changes", plain_counted)
+    monkeypatch.setattr(ev, "_collect", collect_counted)
     first = ev.changes(effect, state, {}, 4.0, keep=True)
     once = len(worked)
     assert ev.changes(effect, state, None, 4.0) == first and len(worked) == once
@@ -165,13 +181,15 @@ def test_kept_changes_are_handed_over_once(effect: Effect, monkeypatch: pytest.M
     assert again == first and again[0] is not first[0] and len(worked) > once
     # a different snapshot, duration or bindings is a different question
     ev.changes(effect, state, {}, 4.0, keep=True)
-    for other in (
-        (effect, State([Atom("p", ("a",))], {("level", ("a",)): 1.0}, OBJECTS), None, 4.0),
-        (effect, state, None, 5.0),
-        (effect, state, {"x": "a"}, 4.0),
-    ):
+    other_state = State([Atom("p", ("a",))], {("level", ("a",)): 1.0}, OBJECTS)
+    others: list[tuple[State, dict[str, str] | None, float]] = [
+        (other_state, None, 4.0),
+        (state, None, 5.0),
+        (state, {"x": "a"}, 4.0),
+    ]
+    for snapshot, bindings, duration in others:
         before = len(worked)
-        assert ev.changes(*other) == first  # type: ignore[arg-type]
+        assert ev.changes(effect, snapshot, bindings, duration) == first
         assert len(worked) > before
 
 

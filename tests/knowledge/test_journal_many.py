@@ -60,10 +60,11 @@ def test_a_swap_that_fails_half_way_puts_everything_back() -> None:
     start = list(table.items())
     mark = table.mark()
 
-    def keys() -> Iterator[str]:
-        yield "d"
-        raise RuntimeError("broken iterator")
+    class Broken(list[str]):
+        def __iter__(self) -> Iterator[str]:
+            yield "d"
+            raise RuntimeError("broken iterator")
 
     with pytest.raises(RuntimeError, match="broken iterator"):
-        table.swap(["a", "c"], keys(), 9)
+        table.swap(["a", "c"], Broken(["d", "e"]), 9)
     assert list(table.items()) == start and table.mark() == mark
