@@ -94,11 +94,14 @@ def main() -> None:
     print(f"{'actions':>8} {'cpu s':>8} {'ms/action':>10}")
     for r in rows:
         print(f"{r['actions']:>8} {r['cpu_s']:>8.3f} {r['cpu_s'] / r['actions'] * 1e3:>10.3f}")
-    per_plan, per_action = fit(rows)
-    print(
-        f"fit: {per_plan * 1e3:.1f} ms per plan + {per_action * 1e3:.3f} ms per action "
-        "(target: < 0.2 ms per action)"
-    )
+    if len({r["actions"] for r in rows}) > 1:
+        per_plan, per_action = fit(rows)
+        print(
+            f"fit: {per_plan * 1e3:.1f} ms per plan + {per_action * 1e3:.3f} ms per action "
+            "(target: < 0.2 ms per action)"
+        )
+    else:
+        print("fit: needs two sizes or more (--sizes 100 1000)")
     if args.parts:
         print_parts(max(args.sizes), args.robots)
 
