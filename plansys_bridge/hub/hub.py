@@ -28,9 +28,9 @@ class Hub:
         self.clock: Clock = clock if clock is not None else WallClock()
         self._routers: dict[str, TopicRouter] = {}
         self._liveness: LivenessTable | None = None
-
-    def publish(self, topic: str, msg: object) -> None:
-        self.transport.publish(topic, msg)
+        self.publish: Callable[[str, object], None] = self.transport.publish
+        """``publish(topic, msg)``: the transport's own method, bound once, so a message
+        costs no call of the hub's (an action's auction publishes about ten)."""
 
     def subscribe(
         self,

@@ -166,6 +166,27 @@ class ActionPerformerStatus:
     node_name: str = ""
 
 
+def performer_status(
+    stamp: float,
+    state: PerformerState,
+    action: str,
+    specialized_arguments: tuple[str, ...],
+    node_name: str,
+) -> ActionPerformerStatus:
+    """``ActionPerformerStatus(...)`` filled in at once, as :func:`action_execution`
+    does: a performer sends one per action it serves on every change of state, two
+    changes per action it executes."""
+    msg = _new(ActionPerformerStatus)
+    msg.__dict__.update(
+        status_stamp=stamp,
+        state=state,
+        action=action,
+        specialized_arguments=specialized_arguments,
+        node_name=node_name,
+    )
+    return msg
+
+
 @dataclass(frozen=True)
 class PlanItem:
     time: float

@@ -10,12 +10,18 @@ without keys gets every message of the topic (recorders, monitors, a foreign cli
 A message whose topic has no router, or that the router cannot place (a type it does
 not know), goes to every subscriber, keyed or not: routing never loses a message a
 subscriber could want.
+
+A performer specialised to some arguments (``move`` for robot ``r2`` only) subscribes
+with a specialised key, ``("action", "move", ("r2",))``: a REQUEST reaches it only when
+its arguments match (PlanSys2's rule, :func:`arguments_match`). Ten robots each serving
+their own ``move`` used to hear every ``move`` REQUEST and refuse nine in ten after
+reading it; now the hub picks the one by a dictionary look-up on the argument.
 """
 
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Callable, Hashable, Iterable
+from collections.abc import Callable, Hashable, Iterable, Sequence
 from heapq import merge
 from itertools import count
 from typing import Any
@@ -60,10 +66,42 @@ def route_key(topic: str, msg: object) -> Hashable | None:
     return router(msg) if router is not None else None
 
 
-def performer_keys(node_name: str, actions: Iterable[str]) -> list[Hashable]:
+def performer_keys(
+    node_name: str, actions: Iterable[str] | dict[str, Sequence[str]]
+) -> list[Hashable]:
     """What a performer hears on ``actions_hub``: REQUESTs for its actions, and the
-    CONFIRM/REJECT/CANCEL messages naming it."""
-    return [*(("action", a) for a in actions), ("node", node_name)]
+    CONFIRM/REJECT/CANCEL messages naming it.
+
+    ``actions`` as a mapping of action name to specialised arguments routes a REQUEST
+    only to performers whose specialised arguments match it; as plain names (or with
+    no specialised argument) every REQUEST of the action arrives."""
+    if isinstance(actions, dict):
+        keys: list[Hashable] = [
+            ("action", a, tuple(spec)) if any(spec) else ("action", a)
+            for a, spec in actions.items()
+        ]
+    else:
+        keys = [("action", a) for a in actions]
+    keys.append(("node", node_name))
+    return keys
+
+
+def arguments_match(specialized: Sequence[str], arguments: Sequence[str]) -> bool:
+    """PlanSys2's rule: compare position by position, ``""`` matches anything.
+
+    No specialised arguments matches every call. Lengths may differ (PlanSys2 only
+    warns): the positions both have are compared.
+    """
+    if not specialized:
+        return True
+    return all(s == "" or s == a for s, a in zip(specialized, arguments, strict=False))
+
+
+def _specialised(key: Hashable) -> tuple[str, tuple[str, ...]] | None:
+    """``(action, spec)`` of a specialised performer key, else None."""
+    if isinstance(key, tuple) and len(key) == 3 and key[0] == "action":
+        return key[1], key[2]
+    return None
 
 
 def client_keys(request_id: str, action: str, arguments: Iterable[str]) -> list[Hashable]:
@@ -76,7 +114,7 @@ def client_keys(request_id: str, action: str, arguments: Iterable[str]) -> list[
 
 
 class _RoutedSubscription:
-    __slots__ = ("callback", "closed", "keys", "order", "router")
+    __slots__ = ("callback", "closed", "keys", "order", "router", "specs")
 
     def __init__(
         self, router: TopicRouter, callback: Callback, keys: tuple[Hashable, ...] | None, order: int
@@ -86,6 +124,8 @@ class _RoutedSubscription:
         self.keys = keys
         self.order = order
         self.closed = False
+        self.specs: dict[str, tuple[str, ...]] = {}
+        """Action name -> specialised arguments, for the specialised keys."""
 
     def close(self) -> None:
         if not self.closed:
@@ -100,6 +140,44 @@ class _RoutedSubscription:
         return f"<Subscription {self.router.topic!r} keys={self.keys} {state}>"
 
 
+class _SpecialisedIndex:
+    """The performers of one action specialised to some arguments, by the first
+    argument each one fixes: a REQUEST finds its candidates with one look-up per
+    position in use (usually one: the robot)."""
+
+    __slots__ = ("positions",)
+
+    def __init__(self, action: str, subs: Iterable[_RoutedSubscription]) -> None:
+        tables: dict[int, dict[str, list[tuple[_RoutedSubscription, tuple[str, ...], bool]]]] = {}
+        for sub in subs:
+            spec = sub.specs[action]
+            fixed = [i for i, value in enumerate(spec) if value]
+            position = fixed[0]
+            # One fixed argument: the look-up is the whole check.
+            entry = (sub, spec, len(fixed) == 1)
+            tables.setdefault(position, {}).setdefault(spec[position], []).append(entry)
+        self.positions = tuple(sorted(tables.items()))
+
+    def candidates(self, arguments: Sequence[str]) -> list[_RoutedSubscription]:
+        """The subscribers whose specialised arguments match, in subscription order."""
+        found: list[_RoutedSubscription] = []
+        merged = len(self.positions) > 1
+        for position, table in self.positions:
+            if position < len(arguments):
+                entries: Iterable[tuple[_RoutedSubscription, tuple[str, ...], bool]] = table.get(
+                    arguments[position], ()
+                )
+            else:  # PlanSys2 compares only the positions both have
+                entries = [e for group in table.values() for e in group]
+                merged = True
+            for sub, spec, single in entries:
+                if single or arguments_match(spec, arguments):
+                    found.append(sub)
+        if merged:
+            found.sort()
+        return found
+
+
 class TopicRouter:
     """The subscribers of one topic in one hub, fed by one transport subscription.
 
@@ -112,7 +190,12 @@ class TopicRouter:
         self.topic = topic
         self._everyone: list[_RoutedSubscription] = []
         self._keyed: dict[Hashable, list[_RoutedSubscription]] = {}
-        self._all_keyed: list[_RoutedSubscription] = []
+        self._all_keyed: dict[_RoutedSubscription, None] = {}
+        """Ordered as subscribed; a dict so that a client leaving (once per action)
+        does not copy the list of everybody."""
+        self._specialised_subs: dict[Hashable, list[_RoutedSubscription]] = {}
+        self._specialised: dict[Hashable, _SpecialisedIndex] = {}
+        """By the REQUEST route key ``("action", name)``."""
         self._router = _ROUTERS.get(topic)
         self._order = count()
         self.transport_subscription: Subscription | None = None
@@ -122,10 +205,20 @@ class TopicRouter:
         sub = _RoutedSubscription(self, callback, key_tuple, next(self._order))
         if key_tuple is None or self._router is None:
             self._everyone = [*self._everyone, sub]
-        else:
-            for key in key_tuple:
+            return sub
+        for key in key_tuple:
+            specialised = _specialised(key)
+            if specialised is not None and any(specialised[1]):
+                action, spec = specialised
+                sub.specs[action] = spec
+                route = ("action", action)
+                self._specialised_subs[route] = [*self._specialised_subs.get(route, ()), sub]
+                self._specialised[route] = _SpecialisedIndex(action, self._specialised_subs[route])
+            else:
+                if specialised is not None:  # nothing fixed: every REQUEST of the action
+                    key = ("action", specialised[0])
                 self._keyed[key] = [*self._keyed.get(key, ()), sub]
-            self._all_keyed = [*self._all_keyed, sub]
+        self._all_keyed[sub] = None
         return sub
 
     def _remove(self, sub: _RoutedSubscription) -> None:
@@ -133,15 +226,38 @@ class TopicRouter:
             self._everyone = [s for s in self._everyone if s is not sub]
             return
         for key in sub.keys or ():
+            specialised = _specialised(key)
+            if specialised is not None:
+                key = ("action", specialised[0])
             remaining = [s for s in self._keyed.get(key, ()) if s is not sub]
             if remaining:
                 self._keyed[key] = remaining
             else:
                 self._keyed.pop(key, None)
-        self._all_keyed = [s for s in self._all_keyed if s is not sub]
+        for action in sub.specs:
+            route = ("action", action)
+            left = [s for s in self._specialised_subs.get(route, ()) if s is not sub]
+            if left:
+                self._specialised_subs[route] = left
+                self._specialised[route] = _SpecialisedIndex(action, left)
+            else:
+                self._specialised_subs.pop(route, None)
+                self._specialised.pop(route, None)
+        self._all_keyed.pop(sub, None)
 
     def __len__(self) -> int:
         return len(self._everyone) + len(self._all_keyed)
+
+    def _targets(self, key: Hashable, msg: object) -> list[_RoutedSubscription] | tuple[()]:
+        """The keyed subscribers ``msg`` (routed by ``key``) is for, in order."""
+        keyed = self._keyed.get(key, ())
+        index = self._specialised.get(key) if self._specialised else None
+        if index is None or not isinstance(msg, ActionExecution):
+            return keyed
+        found = index.candidates(msg.arguments)
+        if not keyed:
+            return found
+        return list(merge(keyed, found)) if found else keyed
 
     def wants(self, msg: object) -> bool:
         """Would :meth:`dispatch` deliver ``msg`` to anybody now?"""
@@ -150,7 +266,7 @@ class TopicRouter:
         key = self._router(msg) if self._router is not None else None
         if key is None:
             return bool(self._all_keyed)
-        return key in self._keyed
+        return bool(self._targets(key, msg))
 
     def dispatch(self, msg: object) -> None:
         """Deliver ``msg`` (called by the transport on the loop)."""
@@ -158,9 +274,10 @@ class TopicRouter:
         key = self._router(msg) if self._router is not None else None
         targets: Iterable[_RoutedSubscription]
         if key is None:
-            targets = merge(everyone, self._all_keyed) if self._all_keyed else everyone
+            all_keyed = list(self._all_keyed)
+            targets = merge(everyone, all_keyed) if all_keyed else everyone
         else:
-            keyed = self._keyed.get(key, ())
+            keyed = self._targets(key, msg)
             if not keyed:
                 targets = everyone
             elif not everyone:
@@ -178,7 +295,8 @@ class TopicRouter:
     def close(self) -> None:
         for sub in (*self._everyone, *self._all_keyed):
             sub.closed = True
-        self._everyone, self._keyed, self._all_keyed = [], {}, []
+        self._everyone, self._keyed, self._all_keyed = [], {}, {}
+        self._specialised_subs, self._specialised = {}, {}
         if self.transport_subscription is not None:
             self.transport_subscription.close()
 

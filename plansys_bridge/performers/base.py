@@ -35,11 +35,11 @@ from pydantic import BaseModel
 from plansys_bridge.errors import HubError
 from plansys_bridge.hub.messages import (
     ActionExecution,
-    ActionPerformerStatus,
     ExecutionType,
     PerformerState,
     Topics,
     action_execution,
+    performer_status,
 )
 from plansys_bridge.hub.routing import performer_keys
 from plansys_bridge.hub.transport import Subscription
@@ -134,6 +134,11 @@ class ActionPerformer(ABC):
         self._own_serves = type(self).serves is not ActionPerformer.serves
         """A subclass decides what it serves itself: ask it (else the same rule is
         read off the REQUEST before any goal is built)."""
+        self._out = (
+            self.hub.publish if type(self)._publish is ActionPerformer._publish else self._publish
+        )
+        """Where messages go: the hub's publish itself unless a subclass hooks
+        :meth:`_publish` (fault injection), a call less per message otherwise."""
         self.bid_costs: BidCosts | None = context.bid_costs.get(node_name)
         """Learned costs (the mission's ``bid_costs:``); where they know the action
         they are bid instead of :meth:`bid`."""
@@ -208,8 +213,12 @@ class ActionPerformer(ABC):
             self.state = PerformerState.FAILURE
             self._publish_status()
             raise
-        # Routed: REQUESTs for the actions served, and the messages naming this node.
-        keys = performer_keys(self.node_name, self.actions)
+        # Routed: REQUESTs for the actions served (only those matching the specialised
+        # arguments, unless a subclass decides what it serves), and the messages
+        # naming this node.
+        keys = performer_keys(
+            self.node_name, list(self.actions) if self._own_serves else self.actions
+        )
         self._loop = asyncio.get_running_loop()
         self._subs = [self.hub.subscribe(Topics.ACTIONS_HUB, self._on_action_msg, keys=keys)]
         self._running = True
@@ -330,7 +339,7 @@ class ActionPerformer(ABC):
             bid=cost,
             request_id=goal.request_id,
         )
-        self._publish(Topics.ACTIONS_HUB, msg)
+        self._out(Topics.ACTIONS_HUB, msg)
 
     def _release_commitment(self) -> None:
         self._committed = None
@@ -406,7 +415,7 @@ class ActionPerformer(ABC):
         status: str = "",
         bid: float | None = None,
     ) -> None:
-        self._publish(
+        self._out(
             Topics.ACTIONS_HUB,
             action_execution(
                 kind,
@@ -427,17 +436,9 @@ class ActionPerformer(ABC):
 
     def _publish_status(self) -> None:
         stamp = self.clock.now()
+        out, state, node = self._out, self.state, self.node_name
         for action, spec in self.actions.items():
-            self._publish(
-                Topics.PERFORMERS_STATUS,
-                ActionPerformerStatus(
-                    status_stamp=stamp,
-                    state=self.state,
-                    action=action,
-                    specialized_arguments=spec,
-                    node_name=self.node_name,
-                ),
-            )
+            out(Topics.PERFORMERS_STATUS, performer_status(stamp, state, action, spec, node))
 
     def _heartbeat(self) -> None:
         # A timer callback rather than a task: heartbeats are most of the traffic of

@@ -3,12 +3,13 @@
 An :class:`ActionGoal` is one action instance of the plan; :class:`ActionFailed`
 is how ``execute()`` says it did not work; a :class:`PerformerContext` holds the
 hub, the clock and the knowledge a performer may read. :func:`arguments_match` is
-PlanSys2's rule for a performer specialised to some arguments.
+PlanSys2's rule for a performer specialised to some arguments (it lives with the hub's
+routing, which applies it to hand a REQUEST only to the performers it fits).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -17,6 +18,7 @@ from plansys_bridge.clock import Clock
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.messages import ActionExecution
+from plansys_bridge.hub.routing import arguments_match
 
 if TYPE_CHECKING:
     from plansys_bridge.knowledge.problem_expert import ProblemExpert
@@ -60,17 +62,6 @@ class PerformerContext:
     recorder: object | None = None
     bid_costs: Mapping[str, BidCosts] = field(default_factory=dict)
     """Learned costs by performer name (the mission's ``bid_costs:`` file)."""
-
-
-def arguments_match(specialized: Sequence[str], arguments: Sequence[str]) -> bool:
-    """PlanSys2's rule: compare position by position, ``""`` matches anything.
-
-    No specialised arguments matches every call. Lengths may differ (PlanSys2 only
-    warns): the positions both have are compared.
-    """
-    if not specialized:
-        return True
-    return all(s == "" or s == a for s, a in zip(specialized, arguments, strict=False))
 
 
 def same_goal(goal: ActionGoal, msg: ActionExecution) -> bool:

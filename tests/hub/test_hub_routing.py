@@ -9,6 +9,7 @@ from collections import Counter
 from typing import Any
 
 import pytest
+from hub_counting import Counting
 
 from plansys_bridge.clock import VirtualClock, run
 from plansys_bridge.hub.auction import ActionClient, AuctionPolicy
@@ -23,7 +24,7 @@ from plansys_bridge.hub.messages import (
 )
 from plansys_bridge.hub.routing import client_keys, performer_keys
 from plansys_bridge.hub.transport import InProcessTransport
-from plansys_bridge.performers.base import ActionGoal, ActionPerformer, PerformerContext
+from plansys_bridge.performers.base import PerformerContext
 
 T = ExecutionType
 
@@ -86,23 +87,6 @@ def test_each_kind_of_auction_message_reaches_exactly_its_subscribers() -> None:
     ]
     assert got["client_2"] == ["RESPONSE:x:", "other"]
     assert len(got["everything"]) == 11
-
-
-class Counting(ActionPerformer):
-    """Counts every auction message it is handed."""
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        self.heard: Counter[str] = Counter()
-
-    def _on_action_msg(self, msg: object) -> None:
-        if isinstance(msg, ActionExecution):
-            self.heard[msg.type.name] += 1
-        super()._on_action_msg(msg)
-
-    async def execute(self, goal: ActionGoal) -> str | None:
-        await asyncio.sleep(1.0)
-        return None
 
 
 def test_an_auction_among_many_bidders_hands_each_performer_only_its_own_messages() -> None:
