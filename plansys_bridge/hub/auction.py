@@ -16,6 +16,11 @@ REJECT to the others, FEEDBACK while it works, FINISH when done, CANCEL to abort
 
 Only loop time is used (``loop.time()``, ``call_at``), so the client runs unchanged on
 the wall clock and on the virtual clock.
+
+The client is driven by its messages and one timer: each message is handled as the
+hub delivers it (a RESPONSE may confirm at once), and ``run()`` awaits only the
+outcome. A coroutine that woke for every message cost a task step, a future and a
+timer per wait, several times what handling the message costs.
 """
 
 from __future__ import annotations
@@ -24,22 +29,21 @@ import asyncio
 import enum
 import itertools
 import math
-from collections import deque
 from collections.abc import Callable, Sequence
 
 from plansys_bridge.errors import HubError
 from plansys_bridge.hub.auction_policy import ActionOutcome, AuctionPolicy, full_action_name
 from plansys_bridge.hub.hub import Hub
-from plansys_bridge.hub.liveness import LivenessTable
+from plansys_bridge.hub.liveness import LivenessTable, could_serve
 from plansys_bridge.hub.messages import (
     ActionExecution,
     ActionPerformerStatus,
     ExecutionType,
     Topics,
     action_execution,
-    readdressed,
 )
 from plansys_bridge.hub.routing import client_keys
+from plansys_bridge.hub.transport import Subscription
 
 __all__ = [
     "ActionClient",
@@ -69,7 +73,13 @@ _LISTENING = (ClientPhase.AUCTION, ClientPhase.EXECUTING)
 member in Python."""
 _RESPONSE = ExecutionType.RESPONSE
 """Read once: an enum member read off its class costs about 0.3 us on Python 3.11,
-and the bidding loop compares every RESPONSE of an auction with it."""
+and the bidding compares every RESPONSE of an auction with it."""
+_FEEDBACK = ExecutionType.FEEDBACK
+_REQUEST = ExecutionType.REQUEST
+_REJECT = ExecutionType.REJECT
+_AUCTION = ClientPhase.AUCTION
+_EXECUTING = ClientPhase.EXECUTING
+_new = object.__new__
 
 
 class ActionClient:
@@ -100,18 +110,33 @@ class ActionClient:
         self.completion = 0.0
         self.status = ""
         self.requests_sent = 0
-        self._inbox: deque[ActionExecution] = deque()
-        self._waiter: asyncio.Future[None] | None = None
         self._cancel_requested = False
         self._cancel_sent_to: str | None = None
         self._last_seen = 0.0
         self._loop: asyncio.AbstractEventLoop | None = None
         self._pending_bidders: list[str] = []
         self._confirm_cb: Callable[[str], None] | None = None
+        self._feedback_cb: FeedbackCallback | None = None
         self._freed = False
         """A matching performer went from RUNNING to READY: worth asking again now."""
         self._liveness: LivenessTable | None = None
         self._unwatch: Callable[[], None] = _nothing
+        self._sub: Subscription | None = None
+        self._done: asyncio.Future[ActionOutcome] | None = None
+        self._timer: asyncio.TimerHandle | None = None
+        self._timer_at = math.inf
+        # the action's auctions (one, more after a lost performer)
+        self._excluded: set[str] = set()
+        self._lost: list[str] = []
+        self._reauctioned = 0
+        # the current auction
+        self._start = 0.0
+        self._give_up_at = 0.0
+        self._sent = 0
+        self._bids: list[tuple[float, int, str]] = []
+        self._seen: set[str] = set()
+        self._bid_deadline = math.inf
+        self._publish = hub.publish
 
     @property
     def full_name(self) -> str:
@@ -136,219 +161,276 @@ class ActionClient:
         if self.phase is not ClientPhase.NEW:
             raise HubError(f"{self!r}: run() may be called only once")
         self._confirm_cb = confirm_cb
-        self._loop = asyncio.get_running_loop()
+        self._feedback_cb = feedback_cb
+        loop = self._loop = asyncio.get_running_loop()
         self._liveness = self.hub.liveness
+        done: asyncio.Future[ActionOutcome] = loop.create_future()
+        self._done = done
         keys = client_keys(self.request_id, self.action, self.arguments)
-        sub = self.hub.subscribe(Topics.ACTIONS_HUB, self._on_action_msg, keys=keys)
+        self._sub = self.hub.subscribe(Topics.ACTIONS_HUB, self._on_action_msg, keys=keys)
         try:
-            return await self._run(feedback_cb)
+            self._begin_auction()
+            return await done
         except BaseException:
             # Cancelled from outside (a halted behaviour tree) or a failing callback:
             # never leave a performer working, or one committed to us, behind.
             self._reject_pending()
-            if self.phase is ClientPhase.EXECUTING:
+            if self.phase is _EXECUTING:
                 self._send_cancel()
             raise
         finally:
-            self.phase = ClientPhase.DONE
-            sub.close()
+            self._end()
 
     def cancel(self) -> None:
         """Stop the action: CANCEL to the confirmed performer; ``run()`` returns cancelled."""
         if self.phase is ClientPhase.DONE or self._cancel_requested:
             return
         self._cancel_requested = True
-        if self.phase is ClientPhase.EXECUTING:
+        if self.phase is _EXECUTING:
             self._send_cancel()
-        self._wake()
+            self._finish(False, "cancelled", cancelled=True)
+        elif self.phase is _AUCTION:
+            self._auction_step()
+        # NEW: run() finds the request when it starts
 
-    # ------------------------------------------------------------------ protocol
+    # ------------------------------------------------------------------ auction
 
-    async def _run(self, feedback_cb: FeedbackCallback | None) -> ActionOutcome:
-        excluded: set[str] = set()
-        lost: list[str] = []
-        reauctioned = 0
-        while True:
-            winner = await self._auction(excluded)
-            if self._cancel_requested:
-                return self._outcome(False, "cancelled", reauctioned, lost, cancelled=True)
-            if winner is None:
-                why = (
-                    f"no performer answered the REQUEST for {self.full_name} "
-                    f"within {self.policy.give_up_after:g} s"
-                )
-                if lost:
-                    why += f" (after losing {', '.join(lost)})"
-                return self._outcome(False, why, reauctioned, lost, gave_up=True)
-            outcome = await self._supervise(winner, feedback_cb, reauctioned, lost)
-            if outcome is not None:
-                return outcome
-            # Lost: stop it in case it is only mute, and never pick it again.
-            self._send_cancel()
-            excluded.add(winner)
-            lost.append(winner)
-            if reauctioned >= self.policy.reauctions:
-                why = (
-                    f"performer {winner} lost: neither feedback nor heartbeat for "
-                    f"{self.policy.liveness_timeout:g} s"
-                )
-                why += (
-                    f"; re-auctioned {reauctioned} time(s), giving up"
-                    if reauctioned
-                    else "; re-auction disabled"
-                )
-                return self._outcome(False, why, reauctioned, lost)
-            reauctioned += 1
-
-    async def _auction(self, excluded: set[str]) -> str | None:
-        """Run one auction; return the confirmed node, or None (gave up / cancelled)."""
+    def _begin_auction(self) -> None:
         loop = self._require_loop()
-        policy = self.policy
-        self.phase = ClientPhase.AUCTION
+        self.phase = _AUCTION
         self.performer = ""
         self.completion = 0.0
         self._cancel_sent_to = None
-        start = loop.time()
-        give_up_at = start + policy.give_up_after
+        self._start = loop.time()
+        self._give_up_at = self._start + self.policy.give_up_after
         self._pending_bidders = []
         self._freed = False
+        self._sent = 0
+        self._bids = []
+        self._seen = set()
+        self._bid_deadline = math.inf
         if self._liveness is not None:
             self._unwatch = self._liveness.watch(self.action, self._on_freed)
-        try:
-            return await self._bidding(excluded, start, give_up_at)
-        finally:
-            self._unwatch()
-            self._unwatch = _nothing
+        self._auction_step()
 
-    async def _bidding(self, excluded: set[str], start: float, give_up_at: float) -> str | None:
+    def _auction_over(self) -> None:
+        self._unwatch()
+        self._unwatch = _nothing
+
+    def _auction_step(self) -> None:
+        """Move the auction on: confirm, give up, or (re-)send the REQUEST, then wait
+        for the next message or the timer."""
         loop = self._require_loop()
         policy = self.policy
-        sent = 0
-        bids: list[tuple[float, int, str]] = []
-        seen: set[str] = set()
-        bid_deadline = math.inf
         while True:
             if self._cancel_requested:
                 self._reject_pending()
-                return None
+                self._finish(False, "cancelled", cancelled=True)
+                return
             now = loop.time()
-            if bids and (policy.selection == "first" or now >= bid_deadline):
-                break
-            deadline: float
-            if bids:
-                deadline = bid_deadline
+            if self._bids:
+                deadline = self._bid_deadline
+                if policy.selection == "first" or now >= deadline:
+                    self._confirm()
+                    return
             else:
-                if now >= give_up_at:
-                    return None
-                next_request = start + sent * policy.retry_period
-                if self._freed and sent and start + sent * policy.retry_period < give_up_at:
+                if now >= self._give_up_at:
+                    self._give_up()
+                    return
+                start, sent, period = self._start, self._sent, policy.retry_period
+                if self._freed and sent and start + sent * period < self._give_up_at:
                     # A performer that can serve us just finished its other action: ask
                     # at once, using up the next periodic REQUEST's slot, so the count
                     # stays one per retry period and none goes out after giving up.
                     self._freed = False
-                    self._send(ExecutionType.REQUEST, "")
+                    self._send(_REQUEST, "")
                     sent += 1
-                elif now >= next_request:
-                    self._send(ExecutionType.REQUEST, "")
+                elif now >= start + sent * period:
+                    self._send(_REQUEST, "")
                     sent += 1
                     # Catch up without a burst if the loop was held up for a while.
-                    while start + sent * policy.retry_period <= now:
+                    while start + sent * period <= now:
                         sent += 1
-                deadline = min(start + sent * policy.retry_period, give_up_at)
-            # RESPONSEs arrive in bursts: take those already in hand without a wait.
-            inbox = self._inbox
-            msg = inbox.popleft() if inbox else await self._next(deadline)
-            if msg is None or msg.type is not _RESPONSE:
-                continue  # FEEDBACK/FINISH of a performer dropped earlier: stale
+                self._sent = sent
+                deadline = min(start + sent * period, self._give_up_at)
+            if deadline > now:
+                self._arm(deadline)
+                return
+
+    def _on_bid(self, msg: ActionExecution) -> None:
+        if msg.type is _RESPONSE:  # else: FEEDBACK/FINISH of a performer dropped earlier
             node = msg.node_id
-            if node in excluded:
-                self._send(ExecutionType.REJECT, node)
-                continue
-            if node in seen:
-                continue  # a RESPONSE repeated for a re-sent REQUEST
-            seen.add(node)
-            self._pending_bidders.append(node)
-            cost = msg.bid if msg.bid is not None and not math.isnan(msg.bid) else math.inf
-            bids.append((cost, len(bids), node))
-            if len(bids) == 1:
-                bid_deadline = loop.time() + policy.bid_window
-        winner = min(bids)[2]
+            if node in self._excluded:
+                self._send(_REJECT, node)
+            elif node not in self._seen:  # else: a RESPONSE repeated for a re-sent REQUEST
+                self._seen.add(node)
+                self._pending_bidders.append(node)
+                bid = msg.bid
+                cost = bid if bid is not None and not math.isnan(bid) else math.inf
+                bids = self._bids
+                bids.append((cost, len(bids), node))
+                now = self._require_loop().time()
+                if len(bids) == 1:
+                    self._bid_deadline = now + self.policy.bid_window
+                elif now < self._bid_deadline and self._timer_at <= self._bid_deadline:
+                    return  # still collecting bids, the timer set: nothing else to do
+        self._auction_step()
+
+    def _confirm(self) -> None:
+        winner = min(self._bids)[2]
         self._pending_bidders.remove(winner)
         self._send(ExecutionType.CONFIRM, winner)
         self.performer = winner
-        self.phase = ClientPhase.EXECUTING
+        self.phase = _EXECUTING
         self._reject_pending()
+        self._auction_over()
         if self._confirm_cb is not None:
-            self._confirm_cb(winner)
-        return winner
-
-    async def _supervise(
-        self,
-        winner: str,
-        feedback_cb: FeedbackCallback | None,
-        reauctioned: int,
-        lost: list[str],
-    ) -> ActionOutcome | None:
-        """Follow the confirmed performer; None means it was declared lost."""
-        loop = self._require_loop()
-        self._last_seen = loop.time()
+            try:
+                self._confirm_cb(winner)
+            except Exception as exc:
+                self._fail(exc)
+                return
+        if self.phase is not _EXECUTING:
+            return  # cancelled by the callback
+        self._last_seen = self._require_loop().time()
         self.completion = 0.0
+        self._arm(self._last_seen + self.policy.liveness_timeout)
+
+    def _give_up(self) -> None:
+        self._auction_over()
+        why = (
+            f"no performer answered the REQUEST for {self.full_name} "
+            f"within {self.policy.give_up_after:g} s"
+        )
+        if self._lost:
+            why += f" (after losing {', '.join(self._lost)})"
+        self._finish(False, why, gave_up=True)
+
+    # ------------------------------------------------------------------ execution
+
+    def _on_supervised(self, msg: ActionExecution) -> None:
+        """A message while the confirmed performer works."""
+        node = msg.node_id
+        winner = self.performer
+        kind = msg.type
+        if kind is _RESPONSE:
+            if node != winner:
+                self._send(_REJECT, node)  # late responder
+            return
+        if node != winner:
+            return  # a lost performer's late words; it was cancelled
+        self._last_seen = self._require_loop().time()
+        if kind is _FEEDBACK:
+            self.completion = float(msg.completion)
+            self.status = msg.status
+            if self._feedback_cb is not None:
+                try:
+                    self._feedback_cb(self.completion, self.status)
+                except Exception as exc:
+                    self._fail(exc)
+            return
+        # FINISH
+        self.completion = 1.0 if msg.success else max(self.completion, float(msg.completion))
+        self._finish(msg.success, msg.status or ("succeeded" if msg.success else "failed"))
+
+    def _check_alive(self) -> None:
+        """The timer in execution: is the confirmed performer still heard from?"""
+        loop = self._require_loop()
+        timeout = self.policy.liveness_timeout
         while True:
-            if self._cancel_requested:
-                self._send_cancel()
-                return self._outcome(False, "cancelled", reauctioned, lost, cancelled=True)
-            deadline = self._last_seen + self.policy.liveness_timeout
-            if loop.time() >= deadline:
-                heard = self._liveness.last_running(winner) if self._liveness else None
-                if heard is None or heard <= self._last_seen:
-                    return None
-                self._last_seen = heard  # its RUNNING heartbeats kept it alive
-                continue
-            msg = await self._next(deadline)
-            if msg is None:
-                continue
-            if msg.type is ExecutionType.RESPONSE:
-                if msg.node_id != winner:
-                    self._send(ExecutionType.REJECT, msg.node_id)  # late responder
-                continue
-            if msg.node_id != winner:
-                continue  # a lost performer's late words; it was cancelled
-            self._last_seen = loop.time()
-            if msg.type is ExecutionType.FEEDBACK:
-                self.completion = float(msg.completion)
-                self.status = msg.status
-                if feedback_cb is not None:
-                    feedback_cb(self.completion, self.status)
-                continue
-            # FINISH
-            self.completion = 1.0 if msg.success else max(self.completion, float(msg.completion))
-            status = msg.status or ("succeeded" if msg.success else "failed")
-            self.status = status
-            return self._outcome(msg.success, status, reauctioned, lost)
+            deadline = self._last_seen + timeout
+            if loop.time() < deadline:
+                self._arm(deadline)
+                return
+            liveness = self._liveness
+            heard = liveness.last_running(self.performer) if liveness is not None else None
+            if heard is None or heard <= self._last_seen:
+                self._performer_lost()
+                return
+            self._last_seen = heard  # its RUNNING heartbeats kept it alive
+
+    def _performer_lost(self) -> None:
+        # Stop it in case it is only mute, and never pick it again.
+        winner = self.performer
+        self._send_cancel()
+        self._excluded.add(winner)
+        self._lost.append(winner)
+        reauctioned = self._reauctioned
+        if reauctioned >= self.policy.reauctions:
+            why = (
+                f"performer {winner} lost: neither feedback nor heartbeat for "
+                f"{self.policy.liveness_timeout:g} s"
+            )
+            why += (
+                f"; re-auctioned {reauctioned} time(s), giving up"
+                if reauctioned
+                else "; re-auction disabled"
+            )
+            self._finish(False, why)
+            return
+        self._reauctioned += 1
+        self._begin_auction()
 
     # ------------------------------------------------------------------ plumbing
 
-    def _outcome(
-        self,
-        success: bool,
-        status: str,
-        reauctioned: int,
-        lost: list[str],
-        *,
-        cancelled: bool = False,
-        gave_up: bool = False,
-    ) -> ActionOutcome:
+    def _finish(
+        self, success: bool, status: str, *, cancelled: bool = False, gave_up: bool = False
+    ) -> None:
+        """The action is over: stop listening and hand ``run()`` its outcome."""
         self.status = status
-        return ActionOutcome(
+        outcome = ActionOutcome(
             success=success,
             status=status,
             completion=self.completion,
             performer=self.performer,
-            reauctioned=reauctioned,
+            reauctioned=self._reauctioned,
             cancelled=cancelled,
             gave_up=gave_up,
-            lost_performers=tuple(lost),
+            lost_performers=tuple(self._lost),
         )
+        self._end()
+        done = self._done
+        if done is not None and not done.done():
+            done.set_result(outcome)
+
+    def _fail(self, exc: Exception) -> None:
+        """A callback raised: ``run()`` raises it, as when it was called there."""
+        self._reject_pending()
+        if self.phase is _EXECUTING:
+            self._send_cancel()
+        self._end()
+        done = self._done
+        if done is not None and not done.done():
+            done.set_exception(exc)
+
+    def _end(self) -> None:
+        self.phase = ClientPhase.DONE
+        self._auction_over()
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        if self._sub is not None:
+            self._sub.close()
+            self._sub = None
+
+    def _arm(self, deadline: float) -> None:
+        """Be woken at ``deadline`` (loop time). One timer serves every wait: one that
+        rings earlier is kept, and the wait is taken up again when it rings."""
+        timer = self._timer
+        if timer is not None:
+            if self._timer_at <= deadline:
+                return
+            timer.cancel()
+        self._timer_at = deadline
+        self._timer = self._require_loop().call_at(deadline, self._on_timer)
+
+    def _on_timer(self) -> None:
+        self._timer = None
+        self._timer_at = math.inf
+        if self.phase is _AUCTION:
+            self._auction_step()
+        elif self.phase is _EXECUTING:
+            self._check_alive()
 
     def _require_loop(self) -> asyncio.AbstractEventLoop:
         if self._loop is None:  # pragma: no cover - run() sets it first
@@ -356,9 +438,9 @@ class ActionClient:
         return self._loop
 
     def _send(self, kind: ExecutionType, node_id: str) -> None:
-        if kind is ExecutionType.REQUEST:
+        if kind is _REQUEST:
             self.requests_sent += 1
-        self.hub.publish(
+        self._publish(
             Topics.ACTIONS_HUB,
             action_execution(
                 kind, node_id, self.action, self.arguments, request_id=self.request_id
@@ -374,74 +456,41 @@ class ActionClient:
         pending, self._pending_bidders = self._pending_bidders, []
         if not pending:
             return
-        reject = action_execution(
-            ExecutionType.REJECT, "", self.action, self.arguments, request_id=self.request_id
-        )
-        publish = self.hub.publish
+        fields = action_execution(
+            _REJECT, "", self.action, self.arguments, request_id=self.request_id
+        ).__dict__
+        publish = self._publish
         for node in pending:
-            publish(Topics.ACTIONS_HUB, readdressed(reject, node))
-
-    def _matches(self, msg: ActionExecution) -> bool:
-        if msg.request_id and self.request_id and msg.request_id != self.request_id:
-            return False
-        return msg.action == self.action and tuple(msg.arguments) == self.arguments
+            # messages.readdressed, inlined: every bidder but one of an auction gets one
+            reject = _new(ActionExecution)
+            reject.__dict__.update(fields)
+            reject.__dict__["node_id"] = node
+            publish(Topics.ACTIONS_HUB, reject)
 
     def _on_action_msg(self, msg: object) -> None:
-        if (
-            isinstance(msg, ActionExecution)
-            and msg.type in _INCOMING
-            and self._matches(msg)
-            and self.phase in _LISTENING
+        if not isinstance(msg, ActionExecution) or msg.type not in _INCOMING:
+            return
+        # Is it about this request? (request_id when both have one, else the text)
+        rid = msg.request_id
+        if rid and self.request_id and rid != self.request_id:
+            return
+        arguments = msg.arguments
+        if msg.action != self.action or (
+            arguments != self.arguments and tuple(arguments) != self.arguments
         ):
-            self._inbox.append(msg)
-            waiter = self._waiter
-            if waiter is not None and not waiter.done():
-                waiter.set_result(None)
+            return
+        phase = self.phase
+        if phase is _AUCTION:
+            self._on_bid(msg)
+        elif phase is _EXECUTING:
+            self._on_supervised(msg)
 
     def _on_freed(self, msg: ActionPerformerStatus) -> None:
         """The liveness table saw a performer of our action finish its other work."""
-        if self.phase is ClientPhase.AUCTION and self._could_serve(msg):
+        if self.phase is _AUCTION and could_serve(msg, self.action, self.arguments):
             self._freed = True
-            self._wake()
-
-    def _could_serve(self, msg: ActionPerformerStatus) -> bool:
-        """Does this heartbeat come from a performer whose action and specialised
-        arguments (empty string = any) fit this request?"""
-        if msg.action != self.action or len(msg.specialized_arguments) > len(self.arguments):
-            return False
-        return all(
-            want in ("", have)
-            for want, have in zip(msg.specialized_arguments, self.arguments, strict=False)
-        )
-
-    def _wake(self) -> None:
-        waiter = self._waiter
-        if waiter is not None and not waiter.done():
-            waiter.set_result(None)
-
-    async def _next(self, deadline: float) -> ActionExecution | None:
-        """The next matching message, or None at ``deadline`` (loop time) or on cancel()."""
-        if self._inbox:
-            return self._inbox.popleft()
-        loop = self._require_loop()
-        if loop.time() >= deadline or self._cancel_requested:
-            return None
-        waiter: asyncio.Future[None] = loop.create_future()
-        self._waiter = waiter
-        timer = loop.call_at(deadline, _resolve, waiter) if math.isfinite(deadline) else None
-        try:
-            await waiter
-        finally:
-            self._waiter = None
-            if timer is not None:
-                timer.cancel()
-        return self._inbox.popleft() if self._inbox else None
+            self._auction_step()
 
 
 def _nothing() -> None:
     return None
-
-
-def _resolve(waiter: asyncio.Future[None]) -> None:
-    if not waiter.done():
-        waiter.set_result(None)

@@ -20,7 +20,7 @@ from collections.abc import Callable
 
 from plansys_bridge.hub.messages import ActionPerformerStatus, PerformerState
 
-__all__ = ["LivenessTable"]
+__all__ = ["LivenessTable", "could_serve"]
 
 FreedCallback = Callable[[ActionPerformerStatus], None]
 
@@ -74,3 +74,13 @@ class LivenessTable:
                 self._watchers.pop(action, None)
 
         return unwatch
+
+
+def could_serve(msg: ActionPerformerStatus, action: str, arguments: tuple[str, ...]) -> bool:
+    """Does this heartbeat come from a performer whose action and specialised
+    arguments (empty string = any) fit a request for ``action`` with ``arguments``?"""
+    if msg.action != action or len(msg.specialized_arguments) > len(arguments):
+        return False
+    return all(
+        want in ("", have) for want, have in zip(msg.specialized_arguments, arguments, strict=False)
+    )
