@@ -113,7 +113,8 @@ class ActionClient:
         self._cancel_requested = False
         self._cancel_sent_to: str | None = None
         self._last_seen = 0.0
-        self._loop: asyncio.AbstractEventLoop | None = None
+        self._loop: asyncio.AbstractEventLoop
+        """The running loop, set by ``run()``: only what runs after it reads it."""
         self._pending_bidders: list[str] = []
         self._confirm_cb: Callable[[str], None] | None = None
         self._feedback_cb: FeedbackCallback | None = None
@@ -196,7 +197,7 @@ class ActionClient:
     # ------------------------------------------------------------------ auction
 
     def _begin_auction(self) -> None:
-        loop = self._require_loop()
+        loop = self._loop
         self.phase = _AUCTION
         self.performer = ""
         self.completion = 0.0
@@ -214,13 +215,14 @@ class ActionClient:
         self._auction_step()
 
     def _auction_over(self) -> None:
-        self._unwatch()
-        self._unwatch = _nothing
+        if self._unwatch is not _nothing:
+            self._unwatch()
+            self._unwatch = _nothing
 
     def _auction_step(self) -> None:
         """Move the auction on: confirm, give up, or (re-)send the REQUEST, then wait
         for the next message or the timer."""
-        loop = self._require_loop()
+        loop = self._loop
         policy = self.policy
         while True:
             if self._cancel_requested:
@@ -269,7 +271,7 @@ class ActionClient:
                 cost = bid if bid is not None and not math.isnan(bid) else math.inf
                 bids = self._bids
                 bids.append((cost, len(bids), node))
-                now = self._require_loop().time()
+                now = self._loop.time()
                 if len(bids) == 1:
                     self._bid_deadline = now + self.policy.bid_window
                 elif now < self._bid_deadline and self._timer_at <= self._bid_deadline:
@@ -292,7 +294,7 @@ class ActionClient:
                 return
         if self.phase is not _EXECUTING:
             return  # cancelled by the callback
-        self._last_seen = self._require_loop().time()
+        self._last_seen = self._loop.time()
         self.completion = 0.0
         self._arm(self._last_seen + self.policy.liveness_timeout)
 
@@ -319,7 +321,7 @@ class ActionClient:
             return
         if node != winner:
             return  # a lost performer's late words; it was cancelled
-        self._last_seen = self._require_loop().time()
+        self._last_seen = self._loop.time()
         if kind is _FEEDBACK:
             self.completion = float(msg.completion)
             self.status = msg.status
@@ -335,7 +337,7 @@ class ActionClient:
 
     def _check_alive(self) -> None:
         """The timer in execution: is the confirmed performer still heard from?"""
-        loop = self._require_loop()
+        loop = self._loop
         timeout = self.policy.liveness_timeout
         while True:
             deadline = self._last_seen + timeout
@@ -405,7 +407,8 @@ class ActionClient:
 
     def _end(self) -> None:
         self.phase = ClientPhase.DONE
-        self._auction_over()
+        if self._unwatch is not _nothing:
+            self._auction_over()
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
@@ -422,7 +425,7 @@ class ActionClient:
                 return
             timer.cancel()
         self._timer_at = deadline
-        self._timer = self._require_loop().call_at(deadline, self._on_timer)
+        self._timer = self._loop.call_at(deadline, self._on_timer)
 
     def _on_timer(self) -> None:
         self._timer = None
@@ -431,11 +434,6 @@ class ActionClient:
             self._auction_step()
         elif self.phase is _EXECUTING:
             self._check_alive()
-
-    def _require_loop(self) -> asyncio.AbstractEventLoop:
-        if self._loop is None:  # pragma: no cover - run() sets it first
-            raise HubError(f"{self!r} is not running")
-        return self._loop
 
     def _send(self, kind: ExecutionType, node_id: str) -> None:
         if kind is _REQUEST:

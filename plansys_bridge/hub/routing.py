@@ -114,7 +114,7 @@ def client_keys(request_id: str, action: str, arguments: Iterable[str]) -> list[
 
 
 class _RoutedSubscription:
-    __slots__ = ("callback", "closed", "keys", "order", "router", "specs")
+    __slots__ = ("callback", "closed", "keys", "order", "router", "routes", "specs")
 
     def __init__(
         self, router: TopicRouter, callback: Callback, keys: tuple[Hashable, ...] | None, order: int
@@ -126,6 +126,8 @@ class _RoutedSubscription:
         self.closed = False
         self.specs: dict[str, tuple[str, ...]] = {}
         """Action name -> specialised arguments, for the specialised keys."""
+        self.routes: list[Hashable] = []
+        """The route keys it is listed under in its router's ``_keyed``."""
 
     def close(self) -> None:
         if not self.closed:
@@ -218,6 +220,7 @@ class TopicRouter:
                 if specialised is not None:  # nothing fixed: every REQUEST of the action
                     key = ("action", specialised[0])
                 self._keyed[key] = [*self._keyed.get(key, ()), sub]
+                sub.routes.append(key)
         self._all_keyed[sub] = None
         return sub
 
@@ -225,10 +228,7 @@ class TopicRouter:
         if sub in self._everyone:
             self._everyone = [s for s in self._everyone if s is not sub]
             return
-        for key in sub.keys or ():
-            specialised = _specialised(key)
-            if specialised is not None:
-                key = ("action", specialised[0])
+        for key in sub.routes:
             remaining = [s for s in self._keyed.get(key, ()) if s is not sub]
             if remaining:
                 self._keyed[key] = remaining
@@ -271,13 +271,31 @@ class TopicRouter:
     def dispatch(self, msg: object) -> None:
         """Deliver ``msg`` (called by the transport on the loop)."""
         everyone = self._everyone
-        key = self._router(msg) if self._router is not None else None
+        router = self._router
+        key: Hashable | None
+        if router is _action_route and msg.__class__ is ActionExecution:
+            # _action_route, inlined: every message of every auction comes by here
+            kind = msg.type
+            if kind is _REQUEST:
+                key = ("action", msg.action)
+            elif kind in _TO_CLIENT:
+                rid = msg.request_id
+                key = ("request", rid) if rid else _action_route(msg)
+            else:
+                key = ("node", msg.node_id)
+        else:
+            key = router(msg) if router is not None else None
         targets: Iterable[_RoutedSubscription]
         if key is None:
             all_keyed = list(self._all_keyed)
             targets = merge(everyone, all_keyed) if all_keyed else everyone
         else:
-            keyed = self._targets(key, msg)
+            specialised = self._specialised
+            keyed = (
+                self._targets(key, msg)
+                if specialised and key in specialised
+                else self._keyed.get(key, ())
+            )
             if not keyed:
                 targets = everyone
             elif not everyone:

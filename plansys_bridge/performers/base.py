@@ -132,6 +132,8 @@ class ActionPerformer(ABC):
         self._heartbeat_timer: asyncio.TimerHandle | None = None
         self._running = False
         self._own_serves = type(self).serves is not ActionPerformer.serves
+        self._own_accepts = type(self).accepts is not ActionPerformer.accepts
+        """Only a subclass's own filter is asked (the base one accepts everything)."""
         """A subclass decides what it serves itself: ask it (else the same rule is
         read off the REQUEST before any goal is built)."""
         self._out = (
@@ -286,9 +288,16 @@ class ActionPerformer(ABC):
         elif kind is _CONFIRM:
             self._on_confirm(msg)
         elif kind is _REJECT:
+            # same_goal and the release, inlined: every bidder but one comes here
             committed = self.committed
-            if committed is not None and same_goal(committed, msg):
-                self._release_commitment()
+            if committed is not None:
+                rid = msg.request_id
+                if (
+                    not (committed.request_id and rid and committed.request_id != rid)
+                    and committed.action == msg.action
+                    and committed.arguments == tuple(msg.arguments)
+                ):
+                    self._committed = None
         elif kind is _CANCEL:
             self._on_cancel_msg(msg)
 
@@ -300,7 +309,8 @@ class ActionPerformer(ABC):
             committed = self.committed
             if committed is not None:
                 if committed == goal_of(msg):
-                    self._respond(committed, self._committed_bid)  # our RESPONSE may have been lost
+                    # our RESPONSE may have been lost
+                    self._send(_RESPONSE, committed, bid=self._committed_bid)
                 return
         if self._task is not None:
             return
@@ -314,7 +324,7 @@ class ActionPerformer(ABC):
                 return
             goal = goal_of(msg)
         try:
-            if not self.accepts(goal):
+            if self._own_accepts and not self.accepts(goal):
                 return
             learned = self.bid_costs.cost(goal.action, goal.arguments) if self.bid_costs else None
             cost = learned if learned is not None else self.bid(goal)
@@ -327,19 +337,18 @@ class ActionPerformer(ABC):
         self._committed_bid = cost
         loop = self._loop or asyncio.get_running_loop()
         self._commit_deadline = loop.time() + self.commit_timeout
-        self._respond(goal, cost)
-
-    def _respond(self, goal: ActionGoal, cost: float | None) -> None:
-        # Built here rather than through _send: every bidder of every auction comes by.
-        msg = action_execution(
-            _RESPONSE,
-            self.node_name,
-            goal.action,
-            goal.arguments,
-            bid=cost,
-            request_id=goal.request_id,
+        # _respond, inlined: every bidder of every auction comes by
+        self._out(
+            Topics.ACTIONS_HUB,
+            action_execution(
+                _RESPONSE,
+                self.node_name,
+                goal.action,
+                goal.arguments,
+                bid=cost,
+                request_id=goal.request_id,
+            ),
         )
-        self._out(Topics.ACTIONS_HUB, msg)
 
     def _release_commitment(self) -> None:
         self._committed = None

@@ -14,7 +14,7 @@ from plansys_bridge.clock import VirtualClock, run
 from plansys_bridge.hub.auction import ActionClient
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.messages import ActionExecution, ExecutionType, Topics, action_execution
-from plansys_bridge.hub.routing import TopicRouter, arguments_match, performer_keys
+from plansys_bridge.hub.routing import TopicRouter, arguments_match, client_keys, performer_keys
 from plansys_bridge.hub.transport import InProcessTransport
 from plansys_bridge.performers.base import ActionGoal, PerformerContext
 
@@ -114,3 +114,36 @@ def test_each_robot_hears_only_its_own_requests_and_the_auctions_end_the_same() 
     for robot in robots:
         assert robot.heard == Counter({"REQUEST": 1, "CONFIRM": 1})
     assert itself.heard == Counter({"REQUEST": 5, "REJECT": 5})
+
+
+class _Tagged(ActionExecution):
+    """A subclass: routed by the general route function, not the inlined one."""
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    kind=st.sampled_from(list(ExecutionType)),
+    node=st.sampled_from(["", "n0", "n1"]),
+    action=st.sampled_from(["move", "pick"]),
+    arguments=ARGS,
+    rid=st.sampled_from(["", "1", "2"]),
+)
+def test_the_inlined_route_delivers_as_the_route_function_does(
+    kind: ExecutionType, node: str, action: str, arguments: tuple[str, ...], rid: str
+) -> None:
+    def deliveries(cls: type[ActionExecution]) -> list[int]:
+        router = TopicRouter(Topics.ACTIONS_HUB)
+        got: list[int] = []
+        keysets = [
+            performer_keys("n0", {"move": ("r1",)}),
+            performer_keys("n1", ["move", "pick"]),
+            client_keys("1", "move", ("r1", "a")),
+            client_keys("2", "pick", ("r2",)),
+            None,
+        ]
+        for i, keys in enumerate(keysets):
+            router.add(lambda m, i=i: got.append(i), keys)
+        router.dispatch(cls(kind, node, action, arguments, request_id=rid))
+        return got
+
+    assert deliveries(ActionExecution) == deliveries(_Tagged)
