@@ -259,25 +259,6 @@ class ActionClient:
                 self._arm(deadline)
                 return
 
-    def _on_bid(self, msg: ActionExecution) -> None:
-        if msg.type is _RESPONSE:  # else: FEEDBACK/FINISH of a performer dropped earlier
-            node = msg.node_id
-            if node in self._excluded:
-                self._send(_REJECT, node)
-            elif node not in self._seen:  # else: a RESPONSE repeated for a re-sent REQUEST
-                self._seen.add(node)
-                self._pending_bidders.append(node)
-                bid = msg.bid
-                cost = bid if bid is not None and not math.isnan(bid) else math.inf
-                bids = self._bids
-                bids.append((cost, len(bids), node))
-                now = self._loop.time()
-                if len(bids) == 1:
-                    self._bid_deadline = now + self.policy.bid_window
-                elif now < self._bid_deadline and self._timer_at <= self._bid_deadline:
-                    return  # still collecting bids, the timer set: nothing else to do
-        self._auction_step()
-
     def _confirm(self) -> None:
         winner = min(self._bids)[2]
         self._pending_bidders.remove(winner)
@@ -457,13 +438,14 @@ class ActionClient:
         fields = action_execution(
             _REJECT, "", self.action, self.arguments, request_id=self.request_id
         ).__dict__
-        publish = self._publish
+        rejects: list[object] = []
         for node in pending:
             # messages.readdressed, inlined: every bidder but one of an auction gets one
             reject = _new(ActionExecution)
             reject.__dict__.update(fields)
             reject.__dict__["node_id"] = node
-            publish(Topics.ACTIONS_HUB, reject)
+            rejects.append(reject)
+        self.hub.publish_many(Topics.ACTIONS_HUB, rejects)
 
     def _on_action_msg(self, msg: object) -> None:
         if not isinstance(msg, ActionExecution) or msg.type not in _INCOMING:
@@ -478,10 +460,29 @@ class ActionClient:
         ):
             return
         phase = self.phase
-        if phase is _AUCTION:
-            self._on_bid(msg)
-        elif phase is _EXECUTING:
+        if phase is _EXECUTING:
             self._on_supervised(msg)
+            return
+        if phase is not _AUCTION:
+            return
+        # A bid (inlined: every bidder of an auction comes here)
+        if msg.type is _RESPONSE:  # else: FEEDBACK/FINISH of a performer dropped earlier
+            node = msg.node_id
+            if node in self._excluded:
+                self._send(_REJECT, node)
+            elif node not in self._seen:  # else: a RESPONSE repeated for a re-sent REQUEST
+                self._seen.add(node)
+                self._pending_bidders.append(node)
+                bid = msg.bid
+                cost = bid if bid is not None and not math.isnan(bid) else math.inf
+                bids = self._bids
+                bids.append((cost, len(bids), node))
+                now = self._loop.time()
+                if len(bids) == 1:
+                    self._bid_deadline = now + self.policy.bid_window
+                elif now < self._bid_deadline and self._timer_at <= self._bid_deadline:
+                    return  # still collecting bids, the timer set: nothing else to do
+        self._auction_step()
 
     def _on_freed(self, msg: ActionPerformerStatus) -> None:
         """The liveness table saw a performer of our action finish its other work."""

@@ -288,8 +288,9 @@ class ActionPerformer(ABC):
         elif kind is _CONFIRM:
             self._on_confirm(msg)
         elif kind is _REJECT:
-            # same_goal and the release, inlined: every bidder but one comes here
-            committed = self.committed
+            # same_goal and the release, inlined: every bidder but one comes here. The
+            # commitment is read without its deadline: a lapsed one ends here either way.
+            committed = self._committed
             if committed is not None:
                 rid = msg.request_id
                 if (
