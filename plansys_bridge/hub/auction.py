@@ -448,7 +448,9 @@ class ActionClient:
         self.hub.publish_many(Topics.ACTIONS_HUB, rejects)
 
     def _on_action_msg(self, msg: object) -> None:
-        if not isinstance(msg, ActionExecution) or msg.type not in _INCOMING:
+        if (
+            msg.__class__ is not ActionExecution and not isinstance(msg, ActionExecution)
+        ) or msg.type not in _INCOMING:
             return
         # Is it about this request? (request_id when both have one, else the text)
         rid = msg.request_id
@@ -474,11 +476,12 @@ class ActionClient:
                 self._seen.add(node)
                 self._pending_bidders.append(node)
                 bid = msg.bid
-                cost = bid if bid is not None and not math.isnan(bid) else math.inf
+                cost = bid if bid is not None and bid == bid else math.inf  # NaN: no cost
                 bids = self._bids
-                bids.append((cost, len(bids), node))
+                count = len(bids)
+                bids.append((cost, count, node))
                 now = self._loop.time()
-                if len(bids) == 1:
+                if not count:
                     self._bid_deadline = now + self.policy.bid_window
                 elif now < self._bid_deadline and self._timer_at <= self._bid_deadline:
                     return  # still collecting bids, the timer set: nothing else to do

@@ -278,7 +278,10 @@ class ActionPerformer(ABC):
     # ------------------------------------------------------------------ protocol
 
     def _on_action_msg(self, msg: object) -> None:
-        if not isinstance(msg, ActionExecution) or not self._running:
+        # The class compared first: isinstance is a call, and every message comes here.
+        if (
+            msg.__class__ is not ActionExecution and not isinstance(msg, ActionExecution)
+        ) or not self._running:
             return
         kind = msg.type
         if kind is _REQUEST:
@@ -332,7 +335,7 @@ class ActionPerformer(ABC):
         except Exception:
             log.exception("performer %s: bid/accepts for %s raised", self.node_name, goal.full_name)
             return
-        if cost is not None and (math.isnan(cost) or cost == math.inf):
+        if cost is not None and (cost != cost or cost == math.inf):  # NaN or inf
             return
         self._committed = goal
         self._committed_bid = cost
