@@ -209,7 +209,10 @@ class TopicRouter:
             self._everyone = [*self._everyone, sub]
             return sub
         for key in key_tuple:
-            specialised = _specialised(key)
+            # _specialised, for the keys that may be one (a client's never are)
+            specialised = (
+                _specialised(key) if key.__class__ is not tuple or key[0] == "action" else None
+            )
             if specialised is not None and any(specialised[1]):
                 action, spec = specialised
                 sub.specs[action] = spec
@@ -283,11 +286,13 @@ class TopicRouter:
                 key = ("request", rid) if rid else _action_route(msg)
             else:
                 key = ("node", msg.node_id)
+        elif router is None:  # a topic without routes: everybody is in _everyone
+            key = None
         else:
-            key = router(msg) if router is not None else None
+            key = router(msg)
         targets: Iterable[_RoutedSubscription]
         if key is None:
-            all_keyed = list(self._all_keyed)
+            all_keyed = list(self._all_keyed) if self._all_keyed else None
             targets = merge(everyone, all_keyed) if all_keyed else everyone
         else:
             specialised = self._specialised
