@@ -50,6 +50,13 @@ class Phase:
     Errors raised by the knowledge fail the action with their message."""
 
     label = "Action"
+    enters = False
+    """Whether ``initialise`` does anything, so the standard action calls it only
+    for the phases that need it (set for each subclass from its definition)."""
+
+    def __init_subclass__(cls) -> None:
+        super().__init_subclass__()
+        cls.enters = cls.initialise is not Phase.initialise
 
     def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
         self.ctx = ctx

@@ -27,6 +27,7 @@ from collections.abc import Iterator
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
+from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.execution import phases
 from plansys_bridge.execution.phases import ExecutePhase, Phase
 from plansys_bridge.execution.plan_context import ActionRuntime, PlanContext
@@ -69,15 +70,23 @@ class StandardAction(Behaviour):
         return None
 
     def tick(self) -> Iterator[Behaviour]:
-        """py_trees' ``Behaviour.tick`` without its per-tick debug message and status
-        check (``update`` returns a Status): the same calls in the same order."""
-        if self.status != Status.RUNNING:
-            self.initialise()
-        new_status = self.update()
-        if new_status != Status.RUNNING:
-            self.stop(new_status)
-        self.status = new_status
+        """py_trees' ``Behaviour.tick`` (see :meth:`tick_step`), as the generator
+        py_trees expects."""
+        self.tick_step()
         yield self
+
+    def tick_step(self) -> None:
+        """One tick without a generator, which is how :class:`PlanRoot
+        <plansys_bridge.execution.tree_builder.PlanRoot>` ticks its standard branches:
+        the calls of py_trees' ``Behaviour.tick`` whose effect is not nil here
+        (``initialise`` and, on SUCCESS, ``terminate`` do nothing; py_trees' debug
+        message is skipped), so thousands of ticks do not pay for them."""
+        status = self._advance()
+        if status == Status.RUNNING:
+            self.status = Status.RUNNING
+            return
+        self.ctx.action_finished(self.rt, status == Status.SUCCESS)
+        self.status = Status.SUCCESS
 
     def update(self) -> Status:
         status = self._advance()
@@ -87,6 +96,10 @@ class StandardAction(Behaviour):
         return Status.SUCCESS
 
     def _advance(self) -> Status:
+        """Step through the phases until one is RUNNING or fails. A phase is
+        stepped directly (``Phase.step``, with ``Phase.run``'s error handling
+        inline) and entered only when it has something to do on entry: per action
+        this saves a call per phase and per tick."""
         while True:
             if self._step == _BEFORE_RUN:
                 status = self._run()
@@ -96,8 +109,12 @@ class StandardAction(Behaviour):
                     phase = self._phase = self._make(self._step)
                     if phase is None:
                         return Status.SUCCESS
-                    phase.initialise()
-                status = phase.run()
+                    if phase.enters:
+                        phase.initialise()
+                try:
+                    status = phase.step()
+                except PlansysBridgeError as exc:
+                    status = phase.fail(f"{phase.label}: {exc}")
             if status != Status.SUCCESS:
                 return status
             self._step += 1
@@ -105,24 +122,30 @@ class StandardAction(Behaviour):
 
     def _run(self) -> Status:
         """The reactive part: guards first, then the execution."""
-        if self._execution is None and not self._guards:
+        execution = self._execution
+        if execution is None and not self._guards:
             ctx, rt = self.ctx, self.rt
             pct = ctx.options.overrun_for(rt.step.action)
             if pct is not None and rt.step.duration > 0:
-                self._guards.append(phases.OverrunPhase(ctx, rt, pct))
+                overrun = phases.OverrunPhase(ctx, rt, pct)
+                overrun.initialise()
+                self._guards.append(overrun)
             self._guards.append(phases.OverAllReqPhase(ctx, rt))
-            for guard in self._guards:
-                guard.initialise()
         for guard in self._guards:
-            status = guard.run()
+            try:
+                status = guard.step()
+            except PlansysBridgeError as exc:
+                status = guard.fail(f"{guard.label}: {exc}")
             if status != Status.SUCCESS:
                 self._halt_execution()
                 return status
-        execution = self._execution
         if execution is None:
             execution = self._execution = ExecutePhase(self.ctx, self.rt)
             execution.initialise()
-        status = execution.run()
+        try:
+            status = execution.step()
+        except PlansysBridgeError as exc:
+            status = execution.fail(f"{execution.label}: {exc}")
         if status != Status.RUNNING:
             self._execution = None
             self._guards = []

@@ -151,21 +151,55 @@ class PlanRoot(py_trees.composites.Composite):
         self.ctx = ctx
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """py_trees' generator tick: yields each branch ticked, then the root."""
+        self._enter()
+        for child in self._due():
+            if type(child) is StandardAction:
+                child.tick_step()
+                yield child
+            else:
+                yield from child.tick()
+        self._settle()
+        yield self
+
+    def tick_once(self) -> None:
+        """The same tick as :meth:`tick` without its generators, which is how the
+        executor ticks: a standard branch is stepped by a plain call, so a tick
+        costs a call per branch that can move and nothing per finished or waiting
+        branch."""
+        self._enter()
+        for child in self._due():
+            if type(child) is StandardAction:
+                child.tick_step()
+            else:
+                for _ in child.tick():
+                    pass
+        self._settle()
+
+    def _due(self) -> list[py_trees.behaviour.Behaviour]:
+        """The branches a tick steps, in plan order: active (neither parked nor
+        resting) and not over. Taken before the first is stepped: a branch only
+        ever settles itself, so stepping one does not end another."""
+        done = (Status.SUCCESS, Status.FAILURE)
+        actions, children = self.ctx.actions, self.children
+        return [
+            children[index]
+            for index in sorted(self.ctx.active)
+            if not actions[index].finished and children[index].status not in done
+        ]
+
+    def _enter(self) -> None:
         if self.status != Status.RUNNING:
             for child in self.children:
                 if child.status != Status.INVALID:
                     child.stop(Status.INVALID)
             self.initialise()
-        for index in sorted(self.ctx.active):
-            child = self.children[index]
-            if self.ctx.actions[index].finished or child.status in (Status.SUCCESS, Status.FAILURE):
-                continue
-            yield from child.tick()
+
+    def _settle(self) -> None:
         if self.ctx.unfinished == 0:
             self.stop(Status.SUCCESS)
         else:
             self.status = Status.RUNNING
-        yield self
 
 
 def build_tree(ctx: PlanContext) -> PlanRoot:
