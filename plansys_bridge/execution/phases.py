@@ -214,10 +214,13 @@ class ExecutePhase(Phase):
             ),
             name=f"execute {rt.record.request_id}",
         )
-        ctx.track(self.task)
+        # tracked as PlanContext.track does, with one done callback instead of two:
+        # the loop then schedules one call, not two, when the execution ends
+        ctx.tasks.add(self.task)
         self.task.add_done_callback(self._ended)
 
-    def _ended(self, _task: asyncio.Task[ActionOutcome]) -> None:
+    def _ended(self, task: asyncio.Task[ActionOutcome]) -> None:
+        self.ctx.tasks.discard(task)
         self.ctx.resume(self.rt.index)
         self.ctx.wake()
 

@@ -8,6 +8,8 @@ the same records, hub messages (with their mission times) and knowledge.
 
 from __future__ import annotations
 
+import asyncio
+
 import py_trees
 import pytest
 from test_standard_action import SCENARIOS, _context, _observed
@@ -59,3 +61,27 @@ def test_only_phases_with_an_entry_step_are_entered() -> None:
     entering = {c.__name__ for c in classes if c.enters}
     assert entering == {"AtStartReqPhase", "ExecutePhase", "OverrunPhase"}
     assert not phases.Phase.enters
+
+
+def test_an_ended_execution_is_untracked_and_wakes_the_executor() -> None:
+    """ExecutePhase tracks its task itself (one done callback): when the task ends
+    it leaves ``ctx.tasks``, its resting branch is active again and a tick is due."""
+    ctx = _context("0: (move r2d2 kitchen hall) [5]\n")
+    rt = ctx.actions[0]
+    woken: list[bool] = []
+    ctx.bind_wake(lambda: woken.append(True))
+    execution = phases.ExecutePhase(ctx, rt)
+
+    async def body() -> None:
+        task = asyncio.get_running_loop().create_task(asyncio.sleep(0))
+        ctx.tasks.add(task)
+        task.add_done_callback(execution._ended)
+        ctx.active.discard(rt.index)
+        ctx.resting.add(rt.index)
+        ctx._reads[rt.index] = frozenset()
+        await task
+        await asyncio.sleep(0)
+
+    asyncio.run(body())
+    assert not ctx.tasks and woken == [True]
+    assert rt.index in ctx.active and rt.index not in ctx.resting
