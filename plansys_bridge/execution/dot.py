@@ -23,6 +23,7 @@ import pydot
 
 from plansys_bridge.hub.messages import ActionStatus
 from plansys_bridge.pddl.model import Atom
+from plansys_bridge.planning.plan import PlanStep
 from plansys_bridge.planning.plan_graph import PlanGraph
 
 __all__ = ["STATUS_COLOURS", "IncrementalDot", "plan_graph_to_dot"]
@@ -63,6 +64,10 @@ class IncrementalDot:
         self._root = pydot.Dot(_text(name), graph_type="digraph", rankdir="LR")
         self._root.set_node_defaults(shape="box", style="rounded,filled")
         self._head = _opening(self._root) + _opening(pydot.Cluster("plan", label="plan"))
+        # each node's label up to its state, quoted as pydot quotes (the quoting works
+        # character by character, so a quoted prefix and a quoted state join into the
+        # quoted label): a state change only joins three strings
+        self._labels = [f"a{i} [label={_label_head(i, step)}" for i, step in enumerate(graph.steps)]
         self._nodes = [self._node(i, ActionStatus.NOT_EXECUTED) for i in range(len(graph.steps))]
         self._statuses = [ActionStatus.NOT_EXECUTED] * len(graph.steps)
         self._tail = "}\n" + self._dependencies() + self._subgoals(goal_atoms) + "}\n"
@@ -73,9 +78,9 @@ class IncrementalDot:
         self._text: str | None = None
 
     def _node(self, i: int, status: ActionStatus) -> str:
-        step = self._graph.steps[i]
-        label = f"{i}: {step.text}\n[{step.time:.3f}, {step.duration:.3f}] {status.name.lower()}"
-        return _statement(f"a{i}", label=label, fillcolor=STATUS_COLOURS[status])
+        """As ``_statement(f"a{i}", label=..., fillcolor=...)`` writes it (a test
+        compares the two)."""
+        return self._labels[i] + _status_tail(status)
 
     def set_status(self, i: int, status: ActionStatus) -> None:
         if self._statuses[i] is not status:
@@ -94,8 +99,8 @@ class IncrementalDot:
 
     def _dependencies(self) -> str:
         return "".join(
-            _statement(f"a{src} -> a{dst}", tooltip=str(data.get("reason", "")))
-            for src, dst, data in sorted(self._graph.graph.edges(data=True))
+            f"a{src} -> a{dst} [tooltip={pydot.make_quoted(_text(reason))}];\n"
+            for src, dst, reason in self._graph.edge_reasons()
         )
 
     def _subgoals(self, goal_atoms: Iterable[Atom]) -> str:
@@ -134,6 +139,20 @@ def _statement(target: str, **attrs: str) -> str:
 
 
 _FREE_TEXT = frozenset({"label", "tooltip"})
+
+
+def _label_head(i: int, step: PlanStep) -> str:
+    """Step ``i``'s label without its state, quoted, without the closing quote."""
+    label = f"{i}: {step.text}\n[{step.time:.3f}, {step.duration:.3f}] "
+    return str(pydot.make_quoted(_text(label)))[:-1]
+
+
+@functools.cache
+def _status_tail(status: ActionStatus) -> str:
+    """The end of a node statement after its label's prefix: the state's name (still
+    inside the label's quotes) and the fill colour of the state."""
+    name = pydot.make_quoted(_text(status.name.lower()))[1:]
+    return f"{name}, fillcolor={_value(STATUS_COLOURS[status])}];\n"
 
 
 @functools.cache

@@ -27,8 +27,10 @@ transitive reduction keeps only the edges a reader needs.
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterable, Mapping, Sequence
+import gc
+from collections.abc import Collection, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TypeAlias
 
 import networkx as nx
@@ -52,7 +54,6 @@ from plansys_bridge.planning.effect_access import (
 )
 from plansys_bridge.planning.happening_order import (
     happening_order,
-    point_of,
     transitive_reduction,
 )
 from plansys_bridge.planning.orderings import (
@@ -68,6 +69,7 @@ from plansys_bridge.planning.orderings import (
 )
 from plansys_bridge.planning.plan import Plan, PlanStep
 from plansys_bridge.planning.requirement_text import condition_text, describe_unmet
+from plansys_bridge.planning.step_edges import StepEdges, networkx_graph, orderings_of
 
 __all__ = [
     "END",
@@ -98,13 +100,14 @@ class PlanGraph:
     happening of ``j`` must wait for some happening of ``i``; edge attributes:
     ``reason`` (readable text), ``orderings`` (list of :class:`Ordering`) and
     ``points`` (set of ``(source_point, target_point)`` pairs). Edges are
-    transitively reduced at the level of happenings.
+    transitively reduced at the level of happenings. It is made on first use: the
+    executor needs only the orderings, and making a networkx graph of a
+    1,000-action plan cost as much as finding its orderings.
     """
 
     plan: Plan
     steps: tuple[PlanStep, ...]
     ground: tuple[GroundAction, ...]
-    graph: nx.DiGraph
     orderings: tuple[Ordering, ...]
     """The reduced orderings (what the executor waits for)."""
     unexplained: tuple[UnexplainedRequirement, ...] = ()
@@ -121,6 +124,16 @@ class PlanGraph:
 
     def __len__(self) -> int:
         return len(self.steps)
+
+    @cached_property
+    def graph(self) -> nx.DiGraph:
+        return networkx_graph(self.steps, self._step_edges)
+
+    def edge_reasons(self) -> Iterator[tuple[int, int, str]]:
+        """``(source, target, reason)`` of every edge of :attr:`graph` in sorted order,
+        without making the networkx graph (the DOT view needs only these)."""
+        for (source, target), (os, _points) in sorted(self._step_edges.items()):
+            yield source, target, "; ".join(o.reason for o in os)
 
     def waits(self, step: int, point: Point) -> tuple[tuple[int, Point], ...]:
         """The happenings of other steps that ``step``'s ``point`` must wait for."""
@@ -169,6 +182,7 @@ class PlanGraph:
     _start_waits: list[tuple[tuple[int, Point], ...]] = field(default_factory=list, repr=False)
     _end_waits: list[tuple[tuple[int, Point], ...]] = field(default_factory=list, repr=False)
     _order: list[int] = field(default_factory=list, repr=False)
+    _step_edges: StepEdges = field(default_factory=dict, repr=False)
 
 
 # ---------------------------------------------------------------- building
@@ -190,7 +204,16 @@ def build_plan_graph(
     ``PlanGraph.unexplained`` and :meth:`PlanGraph.check` raises them.
     """
     ev = evaluator if evaluator is not None else Evaluator(domain)
-    return _Builder(plan, domain, state, ev).build(reduce=reduce)
+    # The build makes many small objects and frees none of them until it ends, and
+    # none of them form cycles: the cyclic collector would only walk them again and
+    # again (and the whole heap, in an executor that holds a large knowledge base).
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        return _Builder(plan, domain, state, ev).build(reduce=reduce)
+    finally:
+        if collecting:
+            gc.enable()
 
 
 @dataclass
@@ -428,36 +451,7 @@ class _Builder:
         for src, dst in self.edges:
             succ.setdefault(src, []).append(dst)
         kept = transitive_reduction(order, succ, self.pos) if reduce else set(self.edges)
-        orderings: list[Ordering] = []
-        start_waits: list[list[tuple[int, Point]]] = [[] for _ in range(n)]
-        end_waits: list[list[tuple[int, Point]]] = [[] for _ in range(n)]
-        graph = nx.DiGraph()
-        graph.add_nodes_from(
-            (i, {"action": step.text, "time": step.time, "duration": step.duration})
-            for i, step in enumerate(self.steps)
-        )
-        # the step-level edges are gathered first and given to networkx at once
-        steps: dict[tuple[int, int], tuple[list[Ordering], set[tuple[Point, Point]]]] = {}
-        pos = self.pos
-        for src, dst in sorted(kept, key=lambda e: (pos[e[1]], pos[e[0]])):
-            kind, subject = self.edges[(src, dst)]
-            o = Ordering(src // 2, point_of(src), dst // 2, point_of(dst), kind, subject)
-            orderings.append(o)
-            (end_waits if dst % 2 else start_waits)[dst // 2].append((o.source, o.source_point))
-            found = steps.get((o.source, o.target))
-            if found is None:
-                steps[(o.source, o.target)] = ([o], {(o.source_point, o.target_point)})
-            else:
-                found[0].append(o)
-                found[1].add((o.source_point, o.target_point))
-        graph.add_edges_from(
-            (
-                source,
-                target,
-                {"reason": "; ".join(o.reason for o in os), "orderings": os, "points": points},
-            )
-            for (source, target), (os, points) in steps.items()
-        )
+        orderings, start_waits, end_waits, steps = orderings_of(kept, self.edges, self.pos, n)
         step_order: list[int] = []
         seen: set[int] = set()
         for h in order:
@@ -468,14 +462,14 @@ class _Builder:
             plan=self.plan,
             steps=self.steps,
             ground=ground,
-            graph=graph,
             orderings=tuple(orderings),
             unexplained=tuple(self.unexplained),
             achievers=self.achievers,
             final_state=state,
-            _start_waits=[tuple(w) for w in start_waits],
-            _end_waits=[tuple(w) for w in end_waits],
+            _start_waits=start_waits,
+            _end_waits=end_waits,
             _order=step_order,
+            _step_edges=steps,
         )
 
 
