@@ -37,7 +37,7 @@ import networkx as nx
 
 from plansys_bridge.errors import ExecutionError
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
-from plansys_bridge.knowledge.state import FluentKey, State
+from plansys_bridge.knowledge.state import State
 from plansys_bridge.pddl.model import (
     Atom,
     Condition,
@@ -70,6 +70,7 @@ from plansys_bridge.planning.orderings import (
 from plansys_bridge.planning.plan import Plan, PlanStep
 from plansys_bridge.planning.requirement_text import condition_text, describe_unmet
 from plansys_bridge.planning.step_edges import StepEdges, networkx_graph, orderings_of
+from plansys_bridge.planning.var_history import Access, VarHistory, subject_text
 
 __all__ = [
     "END",
@@ -216,17 +217,6 @@ def build_plan_graph(
             gc.enable()
 
 
-@dataclass
-class _VarHistory:
-    """Accesses of one variable, grouped in runs of mutually commuting accesses."""
-
-    kind: str | None  # kind of the current run
-    current: list[tuple[int, Kind | None]] = field(default_factory=list)
-    """(tail happening, access role) of the current run's members."""
-    previous: list[tuple[int, Kind | None]] = field(default_factory=list)
-    latest_effect: int | None = None
-
-
 class _Builder:
     def __init__(self, plan: Plan, domain: Domain, state: State, ev: Evaluator) -> None:
         self.plan = plan
@@ -234,15 +224,15 @@ class _Builder:
         self.initial = state
         self.ev = ev
         self.steps = tuple(plan.steps)
-        self.edges: dict[tuple[int, int], tuple[Kind, str]] = {}
-        self.vars: dict[_Var, _VarHistory] = {}
+        self.edges: dict[tuple[int, int], tuple[Kind, VarHistory]] = {}
+        self.vars: dict[_Var, VarHistory] = {}
         self.unexplained: list[UnexplainedRequirement] = []
         self.achievers: dict[Atom, int] = {}
         # What a ground condition reads / an effect touches, by id, for those whose
         # answer is the same in every state (see effect_access.reads_fixed); the
         # ground actions are shared between repeated steps and outlive the build.
-        self._fixed_reads: dict[int, tuple[_Var, ...] | None] = {}
-        self._fixed_effects: dict[int, EffectAccess | None] = {}
+        self._fixed_reads: dict[int, tuple[VarHistory, ...] | None] = {}
+        self._fixed_effects: dict[int, Access | None] = {}
 
     # happenings are ints: 2*step (start), 2*step+1 (end)
 
@@ -281,8 +271,8 @@ class _Builder:
         order = happening_order(self.steps)
         self.pos = {h: p for p, h in enumerate(order)}
         state = self.initial
-        open_over_all: dict[int, Collection[_Var]] = {}
-        watchers: dict[_Var, set[int]] = {}
+        open_over_all: dict[int, Collection[VarHistory]] = {}
+        watchers: dict[VarHistory, set[int]] = {}
         for h in order:
             i, is_end = divmod(h, 2)
             g = ground[i]
@@ -298,13 +288,12 @@ class _Builder:
                 for var in open_over_all.pop(i, set()):
                     watchers.get(var, set()).discard(i)
             effect = g.end_effect if is_end else g.start_effect
-            access = self._effect(effect, h, state)
+            access, written = self._effect(effect, h, state)
             if access.plain:  # same adds and deletes in every state: no need to walk
                 state = state.with_changes(adds=access.adds, deletes=access.deleted)
             else:
                 state = self.ev.apply(effect, state, GROUND, dur)
-            added, written = access.adds, access.written
-            for atom in added:
+            for atom in access.adds:
                 if atom in state:
                     self.achievers[atom] = i
             if not is_end:
@@ -338,73 +327,89 @@ class _Builder:
 
     # ------------------------------------------------------------ accesses
 
-    def _ground_vars(self, cond: Condition, state: State) -> Collection[_Var]:
-        """``_condition_vars`` of a ground condition, kept (in the order it was
-        found) when it is the same in every state."""
+    def _ground_vars(self, cond: Condition, state: State) -> Collection[VarHistory]:
+        """The histories of ``_condition_vars`` of a ground condition, kept (in the
+        order it was found) when it is the same in every state."""
         key = id(cond)
         if key not in self._fixed_reads:
             fixed = reads_fixed(cond, self.ev._derived_rules)
             self._fixed_reads[key] = (
-                tuple(self._condition_vars(cond, GROUND, state)) if fixed else None
+                tuple(map(self._history, self._condition_vars(cond, GROUND, state)))
+                if fixed
+                else None
             )
         found = self._fixed_reads[key]
-        return found if found is not None else self._condition_vars(cond, GROUND, state)
+        if found is not None:
+            return found
+        return [self._history(v) for v in self._condition_vars(cond, GROUND, state)]
 
     def _condition_vars(
         self, cond: Condition, bindings: Mapping[str, str], state: State
     ) -> set[_Var]:
         return condition_vars(self.ev, cond, bindings, state)
 
-    def _effect(self, effect: Effect, h: int, state: State) -> EffectAccess:
-        """Record the effect's accesses; returns them (atoms added, variables written)."""
+    def _effect(
+        self, effect: Effect, h: int, state: State
+    ) -> tuple[EffectAccess, tuple[VarHistory, ...]]:
+        """Record the effect's accesses; returns them and the histories written."""
         key = id(effect)
         if key not in self._fixed_effects:
             fixed = writes_fixed(effect)
             self._fixed_effects[key] = (
-                effect_access(self.ev, effect, state, fixed) if fixed else None
+                self._resolve(effect_access(self.ev, effect, state, fixed)) if fixed else None
             )
-        access = self._fixed_effects[key]
-        if access is None:
-            access = effect_access(self.ev, effect, state)
-        for var in access.read:
-            self._read(var, h, h)
-        for var, kind in access.writes:
-            self._write(var, h, kind)
-        return access
+        found = self._fixed_effects[key]
+        if found is None:
+            found = self._resolve(effect_access(self.ev, effect, state))
+        access, read, writes, written = found
+        for hist in read:
+            self._read(hist, h, h)
+        for hist, kind in writes:
+            self._write(hist, h, kind)
+        return access, written
 
-    def _history(self, var: _Var) -> _VarHistory:
+    def _resolve(self, access: EffectAccess) -> Access:
+        """``access`` with its variables' histories (the written ones in the order
+        of ``access.written``)."""
+        history = self._history
+        return (
+            access,
+            tuple(map(history, access.read)),
+            tuple((history(var), kind) for var, kind in access.writes),
+            tuple(map(history, access.written)),
+        )
+
+    def _history(self, var: _Var) -> VarHistory:
         hist = self.vars.get(var)
         if hist is None:
             if var[0] == "a":
                 atom = var[1]
                 assert isinstance(atom, Atom)
-                hist = _VarHistory(kind="add" if atom in self.initial else "del")
+                hist = VarHistory(var, True, "add" if atom in self.initial else "del")
             else:
-                hist = _VarHistory(kind="read")
+                hist = VarHistory(var, False, "read")
             self.vars[var] = hist
         return hist
 
-    def _read(self, var: _Var, head: int, tail: int) -> None:
-        hist = self._history(var)
-        if var[0] == "a":
+    def _read(self, hist: VarHistory, head: int, tail: int) -> None:
+        if hist.is_atom:
             # an atom's reads see the value of the current run; link from its latest writer
             if hist.latest_effect is not None:
-                self._edge(hist.latest_effect, head, "causal", var)
+                self._edge(hist.latest_effect, head, "causal", hist)
             hist.current.append((tail, None))
             return
         if hist.kind == "read":
             for src, _ in hist.previous:
-                self._edge(src, head, "causal", var)
+                self._edge(src, head, "causal", hist)
             hist.current.append((tail, None))
             return
         hist.previous = hist.current
         hist.current = [(tail, None)]
         hist.kind = "read"
         for src, _ in hist.previous:
-            self._edge(src, head, "causal", var)
+            self._edge(src, head, "causal", hist)
 
-    def _write(self, var: _Var, h: int, kind: str) -> None:
-        hist = self._history(var)
+    def _write(self, hist: VarHistory, h: int, kind: str) -> None:
         if hist.kind == kind and kind != "assign":
             members = hist.previous
         else:
@@ -413,11 +418,11 @@ class _Builder:
             hist.kind = kind
             members = hist.previous
         for src, role in members:
-            self._edge(src, h, "effects" if role == "effects" else "threat", var)
+            self._edge(src, h, "effects" if role == "effects" else "threat", hist)
         hist.current.append((h, "effects"))
         hist.latest_effect = h
 
-    def _edge(self, src: int, dst: int, kind: Kind, var: _Var) -> None:
+    def _edge(self, src: int, dst: int, kind: Kind, hist: VarHistory) -> None:
         if src // 2 == dst // 2:
             return
         if self.pos[src] >= self.pos[dst]:
@@ -426,8 +431,9 @@ class _Builder:
             # atom was read by a branch of the condition that does not matter)
             return
         key = (src, dst)
-        if key not in self.edges or (kind == "causal" and self.edges[key][0] != "causal"):
-            self.edges[key] = (kind, _var_text(var))
+        found = self.edges.get(key)
+        if found is None or (kind == "causal" and found[0] != "causal"):
+            self.edges[key] = (kind, hist)
 
     def _unexplained(
         self,
@@ -451,7 +457,9 @@ class _Builder:
         for src, dst in self.edges:
             succ.setdefault(src, []).append(dst)
         kept = transitive_reduction(order, succ, self.pos) if reduce else set(self.edges)
-        orderings, start_waits, end_waits, steps = orderings_of(kept, self.edges, self.pos, n)
+        orderings, start_waits, end_waits, steps = orderings_of(
+            kept, self.edges, self.pos, n, subject_text
+        )
         step_order: list[int] = []
         seen: set[int] = set()
         for h in order:
@@ -471,10 +479,3 @@ class _Builder:
             _order=step_order,
             _step_edges=steps,
         )
-
-
-def _var_text(var: _Var) -> str:
-    if var[0] == "a":
-        return str(var[1])
-    key: FluentKey = var[1]  # type: ignore[assignment]
-    return "(" + " ".join((key[0], *key[1])) + ")"

@@ -9,8 +9,8 @@ making it for a 1,000-action plan cost as much as finding the orderings.
 
 from __future__ import annotations
 
-from collections.abc import Collection, Mapping, Sequence
-from typing import TypeAlias
+from collections.abc import Callable, Collection, Mapping, Sequence
+from typing import TypeAlias, TypeVar
 
 import networkx as nx
 
@@ -25,20 +25,24 @@ StepEdges: TypeAlias = dict[tuple[int, int], tuple[list[Ordering], set[tuple[Poi
 Waits: TypeAlias = list[tuple[tuple[int, Point], ...]]
 """Per step, the (step, point) happenings one of its points waits for."""
 
+_Subject = TypeVar("_Subject")
+
 _POINTS: tuple[Point, Point] = (START, END)
 """A happening's point by its parity (happening ``2*i`` is step ``i``'s start)."""
 
 
 def orderings_of(
     kept: Collection[tuple[int, int]],
-    edges: Mapping[tuple[int, int], tuple[Kind, str]],
+    edges: Mapping[tuple[int, int], tuple[Kind, _Subject]],
     pos: Mapping[int, int],
     n: int,
+    describe: Callable[[_Subject], str],
 ) -> tuple[list[Ordering], Waits, Waits, StepEdges]:
     """The orderings of the ``kept`` happening pairs, sorted by the plan position of
     their target then source, with each step's start and end waits and the edges
-    between steps. ``edges`` gives each pair's kind and subject, ``pos`` each
-    happening's plan position, ``n`` the number of steps."""
+    between steps. ``edges`` gives each pair's kind and subject (written as text by
+    ``describe``, for the kept pairs only), ``pos`` each happening's plan position,
+    ``n`` the number of steps."""
     orderings: list[Ordering] = []
     start_waits: list[list[tuple[int, Point]]] = [[] for _ in range(n)]
     end_waits: list[list[tuple[int, Point]]] = [[] for _ in range(n)]
@@ -48,7 +52,7 @@ def orderings_of(
         kind, subject = edges[(src, dst)]
         source, target = src // 2, dst // 2
         source_point, target_point = _POINTS[src % 2], _POINTS[dst % 2]
-        o = Ordering(source, source_point, target, target_point, kind, subject)
+        o = Ordering(source, source_point, target, target_point, kind, describe(subject))
         orderings.append(o)
         (end_waits if dst % 2 else start_waits)[target].append((source, source_point))
         found = steps.get((source, target))
