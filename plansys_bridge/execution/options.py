@@ -123,6 +123,8 @@ class ExecutorOptions:
 
     def overrun_for(self, action: str) -> float | None:
         """The overrun percentage of ``action``: its own limit, else the global one."""
+        if not self.action_timeouts:  # asked once or twice per action: skip the search
+            return self.overrun_percentage
         limits = _limits(self.action_timeouts, action)
         if "duration_overrun_percentage" in limits:
             return limits["duration_overrun_percentage"]
@@ -130,6 +132,8 @@ class ExecutorOptions:
 
     def at_start_timeout_for(self, action: str) -> float | None:
         """The at-start timeout of ``action``: its own, else the global one."""
+        if not self.action_timeouts:  # asked once or twice per action: skip the search
+            return self.at_start_timeout
         limits = _limits(self.action_timeouts, action)
         if "at_start_timeout" in limits:
             return limits["at_start_timeout"]

@@ -29,6 +29,7 @@ from py_trees.common import Status
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.execution.plan_context import ActionRuntime, EffectDelta, PlanContext
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome
+from plansys_bridge.pddl.model import Condition
 from plansys_bridge.planning.orderings import GROUND, START, Point
 
 __all__ = [
@@ -41,6 +42,10 @@ __all__ = [
     "OverrunPhase",
     "Phase",
     "PredecessorsPhase",
+    "apply_at_end_effect",
+    "apply_at_start_effect",
+    "check_at_end_req",
+    "check_over_all_req",
 ]
 
 
@@ -157,15 +162,18 @@ class AtStartEffectPhase(Phase):
     label = "ApplyAtStartEffect"
 
     def step(self) -> Status:
-        ctx, rt = self.ctx, self.rt
-        effect = rt.ground.start_effect
-        rt.start_delta = EffectDelta.of(
-            ctx.evaluator, effect, ctx.state(), GROUND, rt.step.duration
-        )
-        if not rt.start_delta.empty:
-            ctx.knowledge.apply(effect, GROUND, rt.step.duration)
-        ctx.action_started(rt)
-        return Status.SUCCESS
+        return apply_at_start_effect(self.ctx, self.rt)
+
+
+def apply_at_start_effect(ctx: PlanContext, rt: ActionRuntime) -> Status:
+    """:class:`AtStartEffectPhase`'s step, which keeps no state: the standard action
+    calls it without making a phase object."""
+    effect = rt.ground.start_effect
+    rt.start_delta = EffectDelta.of(ctx.evaluator, effect, ctx.state(), GROUND, rt.step.duration)
+    if not rt.start_delta.empty:
+        ctx.knowledge.apply(effect, GROUND, rt.step.duration)
+    ctx.action_started(rt)
+    return Status.SUCCESS
 
 
 class OverAllReqPhase(Phase):
@@ -175,10 +183,14 @@ class OverAllReqPhase(Phase):
     label = "CheckOverAllReq"
 
     def step(self) -> Status:
-        if self.ctx.holds(self.rt, self.rt.ground.over_all):
-            return Status.SUCCESS
-        unmet = self.ctx.unmet(self.rt, self.rt.ground.over_all)
-        return self.fail(f"over all requirement {unmet} no longer holds")
+        return check_over_all_req(self.ctx, self.rt)
+
+
+def check_over_all_req(ctx: PlanContext, rt: ActionRuntime) -> Status:
+    """:class:`OverAllReqPhase`'s step (stateless, see :func:`apply_at_start_effect`)."""
+    if ctx.holds(rt, rt.ground.over_all):
+        return Status.SUCCESS
+    return _unmet(ctx, rt, rt.ground.over_all, "over all requirement {} no longer holds")
 
 
 class ExecutePhase(Phase):
@@ -282,11 +294,20 @@ class AtEndReqPhase(Phase):
     label = "CheckAtEndReq"
 
     def step(self) -> Status:
-        if self.ctx.holds(self.rt, self.rt.ground.at_end):
-            return Status.SUCCESS
-        return self.fail(
-            f"at end requirement {self.ctx.unmet(self.rt, self.rt.ground.at_end)} does not hold"
-        )
+        return check_at_end_req(self.ctx, self.rt)
+
+
+def check_at_end_req(ctx: PlanContext, rt: ActionRuntime) -> Status:
+    """:class:`AtEndReqPhase`'s step (stateless, see :func:`apply_at_start_effect`)."""
+    if ctx.holds(rt, rt.ground.at_end):
+        return Status.SUCCESS
+    return _unmet(ctx, rt, rt.ground.at_end, "at end requirement {} does not hold")
+
+
+def _unmet(ctx: PlanContext, rt: ActionRuntime, cond: Condition, why: str) -> Status:
+    """Fail the action: ``why`` with the part of ``cond`` that does not hold."""
+    rt.reason = why.format(ctx.unmet(rt, cond))
+    return Status.FAILURE
 
 
 class AtEndEffectPhase(Phase):
@@ -295,8 +316,11 @@ class AtEndEffectPhase(Phase):
     label = "ApplyAtEndEffect"
 
     def step(self) -> Status:
-        ctx, rt = self.ctx, self.rt
-        effect = rt.ground.end_effect
-        ctx.knowledge.apply(effect, GROUND, rt.step.duration)
-        ctx.action_ended(rt)
-        return Status.SUCCESS
+        return apply_at_end_effect(self.ctx, self.rt)
+
+
+def apply_at_end_effect(ctx: PlanContext, rt: ActionRuntime) -> Status:
+    """:class:`AtEndEffectPhase`'s step (stateless, see :func:`apply_at_start_effect`)."""
+    ctx.knowledge.apply(rt.ground.end_effect, GROUND, rt.step.duration)
+    ctx.action_ended(rt)
+    return Status.SUCCESS

@@ -22,7 +22,7 @@ a walk through the decorator and two sequences.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
@@ -39,6 +39,15 @@ _BEFORE_RUN = 3
 """Phases before the run: predecessors (start), at-start requirement, at-start effects."""
 
 
+_OVER_ALL = phases.OverAllReqPhase.label
+_STATELESS: dict[int, tuple[str, Callable[[PlanContext, ActionRuntime], Status]]] = {
+    2: (phases.AtStartEffectPhase.label, phases.apply_at_start_effect),
+    5: (phases.AtEndReqPhase.label, phases.check_at_end_req),
+    6: (phases.AtEndEffectPhase.label, phases.apply_at_end_effect),
+}
+"""The steps that keep no state, by index: their label (for an error) and step."""
+
+
 class StandardAction(Behaviour):
     """One action of the plan, from waiting for its predecessors to its at-end
     effects (see module docs)."""
@@ -50,23 +59,20 @@ class StandardAction(Behaviour):
         self._step = 0
         """Index of the current phase; ``_BEFORE_RUN`` is the run."""
         self._phase: Phase | None = None
-        self._guards: list[Phase] = []
+        self._guarded = False
+        """Whether the guards of the run are set up (``_overrun`` then is one)."""
+        self._overrun: phases.OverrunPhase | None = None
         self._execution: ExecutePhase | None = None
 
     def _make(self, step: int) -> Phase | None:
+        """The phase object of a step that keeps state (see ``_STATELESS``)."""
         ctx, rt = self.ctx, self.rt
         if step == 0:
             return phases.PredecessorsPhase(ctx, rt, START)
         if step == 1:
             return phases.AtStartReqPhase(ctx, rt, ctx.options.at_start_timeout_for(rt.step.action))
-        if step == 2:
-            return phases.AtStartEffectPhase(ctx, rt)
         if step == 4:
             return phases.PredecessorsPhase(ctx, rt, END)
-        if step == 5:
-            return phases.AtEndReqPhase(ctx, rt)
-        if step == 6:
-            return phases.AtEndEffectPhase(ctx, rt)
         return None
 
     def tick(self) -> Iterator[Behaviour]:
@@ -96,17 +102,25 @@ class StandardAction(Behaviour):
         return Status.SUCCESS
 
     def _advance(self) -> Status:
-        """Step through the phases until one is RUNNING or fails. A phase is
-        stepped directly (``Phase.step``, with ``Phase.run``'s error handling
-        inline) and entered only when it has something to do on entry: per action
-        this saves a call per phase and per tick."""
+        """Step through the phases until one is RUNNING or fails. A step that keeps
+        no state is a plain function call (no phase object); a phase is stepped
+        directly (``Phase.step``, with ``Phase.run``'s error handling inline) and
+        entered only when it has something to do on entry."""
         while True:
-            if self._step == _BEFORE_RUN:
+            step = self._step
+            if step == _BEFORE_RUN:
                 status = self._run()
+            elif step in _STATELESS:
+                label, function = _STATELESS[step]
+                try:
+                    status = function(self.ctx, self.rt)
+                except PlansysBridgeError as exc:
+                    self.rt.reason = f"{label}: {exc}"
+                    status = Status.FAILURE
             else:
                 phase = self._phase
                 if phase is None:
-                    phase = self._phase = self._make(self._step)
+                    phase = self._phase = self._make(step)
                     if phase is None:
                         return Status.SUCCESS
                     if phase.enters:
@@ -117,28 +131,32 @@ class StandardAction(Behaviour):
                     status = phase.fail(f"{phase.label}: {exc}")
             if status != Status.SUCCESS:
                 return status
-            self._step += 1
+            self._step = step + 1
             self._phase = None
 
     def _run(self) -> Status:
-        """The reactive part: guards first, then the execution."""
+        """The reactive part: guards first (the overrun, then the over-all
+        requirement), then the execution."""
         execution = self._execution
-        if execution is None and not self._guards:
+        if execution is None and not self._guarded:
+            self._guarded = True
             ctx, rt = self.ctx, self.rt
             pct = ctx.options.overrun_for(rt.step.action)
             if pct is not None and rt.step.duration > 0:
-                overrun = phases.OverrunPhase(ctx, rt, pct)
-                overrun.initialise()
-                self._guards.append(overrun)
-            self._guards.append(phases.OverAllReqPhase(ctx, rt))
-        for guard in self._guards:
-            try:
-                status = guard.step()
-            except PlansysBridgeError as exc:
-                status = guard.fail(f"{guard.label}: {exc}")
-            if status != Status.SUCCESS:
-                self._halt_execution()
-                return status
+                self._overrun = phases.OverrunPhase(ctx, rt, pct)
+                self._overrun.initialise()
+        overrun = self._overrun
+        if overrun is not None and overrun.step() != Status.SUCCESS:
+            self._halt_execution()
+            return Status.FAILURE
+        try:
+            status = phases.check_over_all_req(self.ctx, self.rt)
+        except PlansysBridgeError as exc:
+            self.rt.reason = f"{_OVER_ALL}: {exc}"
+            status = Status.FAILURE
+        if status != Status.SUCCESS:
+            self._halt_execution()
+            return status
         if execution is None:
             execution = self._execution = ExecutePhase(self.ctx, self.rt)
             execution.initialise()
@@ -148,7 +166,8 @@ class StandardAction(Behaviour):
             status = execution.fail(f"{execution.label}: {exc}")
         if status != Status.RUNNING:
             self._execution = None
-            self._guards = []
+            self._overrun = None
+            self._guarded = False
         return status
 
     def _halt_execution(self) -> None:

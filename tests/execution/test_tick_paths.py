@@ -9,14 +9,17 @@ the same records, hub messages (with their mission times) and knowledge.
 from __future__ import annotations
 
 import asyncio
+from dataclasses import replace
 
 import py_trees
 import pytest
 from test_standard_action import SCENARIOS, _context, _observed
 
+from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.execution import phases
+from plansys_bridge.execution.behaviours import ActionBranch
 from plansys_bridge.execution.standard_action import StandardAction
-from plansys_bridge.execution.tree_builder import PlanRoot, build_tree
+from plansys_bridge.execution.tree_builder import PlanRoot, build_tree, default_template
 
 
 @pytest.mark.parametrize("name", sorted(SCENARIOS))
@@ -85,3 +88,26 @@ def test_an_ended_execution_is_untracked_and_wakes_the_executor() -> None:
     asyncio.run(body())
     assert not ctx.tasks and woken == [True]
     assert rt.index in ctx.active and rt.index not in ctx.resting
+
+
+@pytest.mark.parametrize("subtree", [False, True])
+def test_a_knowledge_error_in_a_stateless_step_fails_the_action_with_its_label(
+    subtree: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The standard action calls the stateless steps as plain functions; an error
+    they raise fails the action with the same reason as the phase behaviour gives."""
+    ctx = _context("0: (move r2d2 kitchen hall) [5]\n")
+    ctx.hub.publish = lambda *_a: None  # type: ignore[method-assign]  # the info is not looked at
+    if subtree:
+        ctx.options = replace(ctx.options, action_template=default_template)
+
+    def refuse(*_a: object) -> None:
+        raise KnowledgeError("the knowledge is read-only")
+
+    monkeypatch.setattr(ctx.knowledge, "apply", refuse)
+    root = build_tree(ctx)
+    root.tick_once()
+    rt = ctx.actions[0]
+    assert rt.finished and not rt.start_reached
+    assert rt.record.message == "ApplyAtStartEffect: the knowledge is read-only"
+    assert type(root.children[0]) is (ActionBranch if subtree else StandardAction)
