@@ -16,17 +16,19 @@ __all__ = ["happening_order", "point_of", "transitive_reduction"]
 
 
 def happening_order(steps: Sequence[PlanStep]) -> list[int]:
-    """Every happening of ``steps`` in the order the plan makes them happen."""
-
-    def key(h: int) -> tuple[float, int, int, int]:
-        step = steps[h // 2]
-        if h % 2 == 0:
-            return (round(step.time, 6), 1, h // 2, 0)
+    """Every happening of ``steps`` in the order the plan makes them happen: by time
+    (rounded to the microsecond), ends of actions with a duration first, then by
+    step, starts before ends. The keys are made in one pass, without a key call
+    per happening."""
+    keys: list[tuple[float, int, int, int]] = []
+    for i, step in enumerate(steps):
+        start = round(step.time, 6)
+        keys.append((start, 1, i, 0))
         if step.duration <= 0:
-            return (round(step.time, 6), 1, h // 2, 1)
-        return (round(step.time + step.duration, 6), 0, h // 2, 1)
-
-    return sorted(range(2 * len(steps)), key=key)
+            keys.append((start, 1, i, 1))
+        else:
+            keys.append((round(step.time + step.duration, 6), 0, i, 1))
+    return [2 * i + point for _, _, i, point in sorted(keys)]
 
 
 def point_of(h: int) -> Point:

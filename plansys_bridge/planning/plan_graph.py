@@ -417,8 +417,14 @@ class _Builder:
             hist.current = []
             hist.kind = kind
             members = hist.previous
-        for src, role in members:
-            self._edge(src, h, "effects" if role == "effects" else "threat", hist)
+        if members:  # _edge inlined: a write may follow many readers
+            pos, edges, mine, step = self.pos, self.edges, self.pos[h], h // 2
+            for src, role in members:
+                if src // 2 == step or pos[src] >= mine:
+                    continue
+                kind: Kind = "effects" if role == "effects" else "threat"
+                if (src, h) not in edges:  # a causal or earlier reason stays
+                    edges[(src, h)] = (kind, hist)
         hist.current.append((h, "effects"))
         hist.latest_effect = h
 
