@@ -422,9 +422,8 @@ class _Builder:
             for src, role in members:
                 if src // 2 == step or pos[src] >= mine:
                     continue
-                kind: Kind = "effects" if role == "effects" else "threat"
                 if (src, h) not in edges:  # a causal or earlier reason stays
-                    edges[(src, h)] = (kind, hist)
+                    edges[(src, h)] = ("effects" if role == "effects" else "threat", hist)
         hist.current.append((h, "effects"))
         hist.latest_effect = h
 
