@@ -113,9 +113,11 @@ class PredecessorsPhase(Phase):
                 "not started: the plan stopped after "
                 + (ctx.failures[0] if ctx.failures else "a cancel")
             )
-        while self._next < len(self.waits):
-            j, point = self.waits[self._next]
+        waits = self.waits
+        for n in range(self._next, len(waits)):
+            j, point = waits[n]
             if not ctx.reached(j, point):
+                self._next = n
                 other = ctx.actions[j]
                 if other.finished:
                     if self.point == START:
@@ -123,7 +125,7 @@ class PredecessorsPhase(Phase):
                     return self.fail(f"predecessor {other.text} stopped before its {point}")
                 ctx.park(self.rt.index)
                 return Status.RUNNING
-            self._next += 1
+        self._next = len(waits)
         return Status.SUCCESS
 
 

@@ -39,6 +39,8 @@ _BEFORE_RUN = 3
 """Phases before the run: predecessors (start), at-start requirement, at-start effects."""
 
 
+_END_WAIT = 4
+"""The step that waits for the predecessors of the action's end."""
 _OVER_ALL = phases.OverAllReqPhase.label
 _STATELESS: dict[int, tuple[str, Callable[[PlanContext, ActionRuntime], Status]]] = {
     2: (phases.AtStartEffectPhase.label, phases.apply_at_start_effect),
@@ -71,7 +73,7 @@ class StandardAction(Behaviour):
             return phases.PredecessorsPhase(ctx, rt, START)
         if step == 1:
             return phases.AtStartReqPhase(ctx, rt, ctx.options.at_start_timeout_for(rt.step.action))
-        if step == 4:
+        if step == _END_WAIT:
             return phases.PredecessorsPhase(ctx, rt, END)
         return None
 
@@ -120,6 +122,9 @@ class StandardAction(Behaviour):
             else:
                 phase = self._phase
                 if phase is None:
+                    if step == _END_WAIT and not self.ctx.graph.waits(self.rt.index, END):
+                        self._step = step + 1  # nothing to wait for: the phase would succeed
+                        continue
                     phase = self._phase = self._make(step)
                     if phase is None:
                         return Status.SUCCESS
