@@ -23,7 +23,6 @@ import pydot
 
 from plansys_bridge.hub.messages import ActionStatus
 from plansys_bridge.pddl.model import Atom
-from plansys_bridge.planning.plan import PlanStep
 from plansys_bridge.planning.plan_graph import PlanGraph
 
 __all__ = ["STATUS_COLOURS", "IncrementalDot", "plan_graph_to_dot"]
@@ -67,7 +66,13 @@ class IncrementalDot:
         # each node's label up to its state, quoted as pydot quotes (the quoting works
         # character by character, so a quoted prefix and a quoted state join into the
         # quoted label): a state change only joins three strings
-        self._labels = [f"a{i} [label={_label_head(i, step)}" for i, step in enumerate(graph.steps)]
+        heads = _quoted_inner(
+            [
+                f"{i}: {step.text}\n[{step.time:.3f}, {step.duration:.3f}] "
+                for i, step in enumerate(graph.steps)
+            ]
+        )
+        self._labels = [f'a{i} [label="{head}' for i, head in enumerate(heads)]
         self._nodes = [self._node(i, ActionStatus.NOT_EXECUTED) for i in range(len(graph.steps))]
         self._statuses = [ActionStatus.NOT_EXECUTED] * len(graph.steps)
         self._tail = "}\n" + self._dependencies() + self._subgoals(goal_atoms) + "}\n"
@@ -98,9 +103,11 @@ class IncrementalDot:
         return self._text
 
     def _dependencies(self) -> str:
+        edges = list(self._graph.edge_reasons())
+        tips = _quoted_inner([reason for _, _, reason in edges])
         return "".join(
-            f"a{src} -> a{dst} [tooltip={pydot.make_quoted(_text(reason))}];\n"
-            for src, dst, reason in self._graph.edge_reasons()
+            f'a{src} -> a{dst} [tooltip="{tip}"];\n'
+            for (src, dst, _), tip in zip(edges, tips, strict=True)
         )
 
     def _subgoals(self, goal_atoms: Iterable[Atom]) -> str:
@@ -141,10 +148,18 @@ def _statement(target: str, **attrs: str) -> str:
 _FREE_TEXT = frozenset({"label", "tooltip"})
 
 
-def _label_head(i: int, step: PlanStep) -> str:
-    """Step ``i``'s label without its state, quoted, without the closing quote."""
-    label = f"{i}: {step.text}\n[{step.time:.3f}, {step.duration:.3f}] "
-    return str(pydot.make_quoted(_text(label)))[:-1]
+def _quoted_inner(texts: list[str]) -> list[str]:
+    """Each of ``texts`` as ``pydot.make_quoted(_text(t))`` writes it, without the
+    quotes around it. Both work character by character (a ``\\r\\n`` pair aside,
+    which a separator keeps apart), so the texts are joined with a NUL between them,
+    quoted in one call and split again: a plan's thousands of labels and tooltips
+    cost a few calls, not a few each. A text holding a NUL is quoted on its own."""
+    joined = "\x00".join(texts)
+    if joined.count("\x00") != max(len(texts) - 1, 0):
+        return [str(pydot.make_quoted(_text(t)))[1:-1] for t in texts]
+    if not texts:
+        return []
+    return str(pydot.make_quoted(_text(joined)))[1:-1].split("\x00")
 
 
 @functools.cache

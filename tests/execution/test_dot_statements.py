@@ -4,15 +4,24 @@ state tail; it must be what the general statement writer makes of the whole labe
 from __future__ import annotations
 
 import pytest
+from execution_helpers import knowledge_from, load_domain
 from hypothesis import given
 from hypothesis import strategies as st
 
-from plansys_bridge.execution.dot import IncrementalDot, _statement
+from plansys_bridge.execution.dot import IncrementalDot, _quoted_inner, _statement
 from plansys_bridge.hub.messages import ActionStatus
-from plansys_bridge.planning.plan import Plan, PlanStep
-from plansys_bridge.planning.plan_graph import PlanGraph
+from plansys_bridge.planning.plan import Plan, PlanStep, parse_plan
+from plansys_bridge.planning.plan_graph import PlanGraph, build_plan_graph
 
-_TEXT = st.text(alphabet=st.sampled_from(list('ab "\\\r\n{}[];,=-x\t')), max_size=12)
+_PLAN = """
+0.000: (move robot3 assembly_zone wheels_zone) [5.000]
+0.000: (move robot2 assembly_zone steering_wheels_zone) [5.000]
+5.001: (transport robot3 wheel_3 wheels_zone assembly_zone) [5.000]
+10.002: (move robot3 assembly_zone body_car_zone) [5.000]
+"""
+
+_TEXT = st.text(alphabet=st.sampled_from(list('ab "\\\r\n{}[];,=-x\t\x00')), max_size=12)
+"""Texts with what DOT quoting changes; a NUL takes the dot view's one-by-one path."""
 
 
 def _graph(steps: list[PlanStep]) -> PlanGraph:
@@ -56,3 +65,22 @@ def test_a_state_change_rewrites_its_node_only() -> None:
     ) == after.replace("fillcolor=tomato", "fillcolor=white")
     with pytest.raises(IndexError):
         dot.set_status(3, ActionStatus.FAILED)
+
+
+@given(st.lists(_TEXT, max_size=6))
+def test_texts_quoted_together_are_quoted_as_each_alone(texts: list[str]) -> None:
+    together = _quoted_inner(texts)
+    assert together == [
+        _statement("x", label=t)[len("x [label=") : -len("];\n")][1:-1] for t in texts
+    ]
+
+
+def test_edge_statements_are_what_the_general_writer_makes() -> None:
+    domain = load_domain("factory.pddl")
+    k = knowledge_from(domain, "problem_factory_1.pddl")
+    graph = build_plan_graph(parse_plan(_PLAN), domain, k.state())
+    text = IncrementalDot(graph).text()
+    edges = sorted(graph.graph.edges(data=True))
+    assert edges
+    expected = "".join(_statement(f"a{s} -> a{d}", tooltip=data["reason"]) for s, d, data in edges)
+    assert expected in text
