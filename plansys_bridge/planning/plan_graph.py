@@ -290,12 +290,15 @@ class _Builder:
             effect = g.end_effect if is_end else g.start_effect
             access, written = self._effect(effect, h, state)
             if access.plain:  # same adds and deletes in every state: no need to walk
+                # (with_changes deletes first, so every atom added is then true)
                 state = state.with_changes(adds=access.adds, deletes=access.deleted)
+                for atom in access.adds:
+                    self.achievers[atom] = i
             else:
                 state = self.ev.apply(effect, state, GROUND, dur)
-            for atom in access.adds:
-                if atom in state:
-                    self.achievers[atom] = i
+                for atom in access.adds:
+                    if atom in state:
+                        self.achievers[atom] = i
             if not is_end:
                 ovars = self._ground_vars(g.over_all, state)
                 for var in ovars:

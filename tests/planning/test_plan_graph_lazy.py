@@ -14,6 +14,7 @@ from execution_helpers import knowledge_from, load_domain
 from test_plan_graph import FACTORY_PLAN
 
 from plansys_bridge.errors import ExecutionError
+from plansys_bridge.planning import plan_graph
 from plansys_bridge.planning.plan import parse_plan
 from plansys_bridge.planning.plan_graph import build_plan_graph
 
@@ -66,3 +67,18 @@ def test_the_build_leaves_the_collector_as_it_found_it(enabled: bool) -> None:
         assert gc.isenabled() is enabled
     finally:
         (gc.enable if was else gc.disable)()
+
+
+def test_plain_effects_and_the_general_path_agree(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A plain effect is applied with State.with_changes and its adds are taken as
+    achieved without a look-up; the evaluator's general path must say the same."""
+    domain = load_domain("factory.pddl")
+    k = knowledge_from(domain, "problem_factory_1.pddl")
+    plain = build_plan_graph(parse_plan(PLAN), domain, k.state())
+    monkeypatch.setattr(plan_graph, "writes_fixed", lambda effect: False)
+    general = build_plan_graph(parse_plan(PLAN), domain, k.state())
+    assert plain.achievers and plain.achievers == general.achievers
+    assert plain.orderings == general.orderings
+    assert plain.unexplained == general.unexplained
+    assert plain.final_state is not None and general.final_state is not None
+    assert plain.final_state.facts == general.final_state.facts
