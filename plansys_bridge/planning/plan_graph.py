@@ -285,8 +285,10 @@ class _Builder:
                 self._unexplained(i, when, point_cond, g, state)
             if is_end:
                 # the over-all interval closes before the end effects
-                for var in open_over_all.pop(i, set()):
-                    watchers.get(var, set()).discard(i)
+                # (no empty set made and dropped per happening: a watched
+                # variable keeps its entry in ``watchers`` once it has one)
+                for var in open_over_all.pop(i, ()):
+                    watchers[var].discard(i)
             effect = g.end_effect if is_end else g.start_effect
             access, written = self._effect(effect, h, state)
             if access.plain:  # same adds and deletes in every state: no need to walk
@@ -308,7 +310,11 @@ class _Builder:
                 else:
                     open_over_all[i] = ovars
                     for var in ovars:
-                        watchers.setdefault(var, set()).add(i)
+                        watching = watchers.get(var)
+                        if watching is None:
+                            watchers[var] = {i}
+                        else:
+                            watching.add(i)
             # re-check the over-all conditions this happening may have broken
             for var in written:
                 for j in tuple(watchers.get(var, ())):
@@ -324,8 +330,8 @@ class _Builder:
                             state,
                             detail=f"is broken by step {i} {self.steps[i].text} while it runs",
                         )
-                        for v in open_over_all.pop(j, set()):
-                            watchers.get(v, set()).discard(j)
+                        for v in open_over_all.pop(j, ()):
+                            watchers[v].discard(j)
         return self._result(ground, order, state, reduce=reduce)
 
     # ------------------------------------------------------------ accesses
