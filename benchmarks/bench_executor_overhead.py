@@ -9,16 +9,21 @@ execution info. The CPU time of each run is fitted as ``per_plan + per_action * 
 over the plan sizes: ``per_action`` is the executor's overhead per action.
 ``--parts`` then runs the largest size once more and splits its CPU time into
 parts (plan graph, tree, knowledge, hub, performers: see ``executor_parts.py``).
+``--calls`` counts the Python function calls per action of the largest size under
+cProfile: a figure that does not swing with the machine's speed.
 
 Run::
 
     python benchmarks/bench_executor_overhead.py [--sizes 100 300 1000] [--robots 10] [--parts]
+        [--calls]
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import cProfile
+import pstats
 import time
 from typing import Any
 
@@ -88,6 +93,9 @@ def main() -> None:
     parser.add_argument("--robots", type=int, default=10)
     parser.add_argument("--repeat", type=int, default=2, help="runs per size (best kept)")
     parser.add_argument("--parts", action="store_true", help="split the largest run's CPU time")
+    parser.add_argument(
+        "--calls", action="store_true", help="Python function calls per action (cProfile)"
+    )
     args = parser.parse_args()
     rows = [measure(n, args.robots, args.repeat) for n in args.sizes]
     print(f"Executor CPU time with performers that cost nothing, {args.robots} robots")
@@ -104,6 +112,16 @@ def main() -> None:
         print("fit: needs two sizes or more (--sizes 100 1000)")
     if args.parts:
         print_parts(max(args.sizes), args.robots)
+    if args.calls:
+        print_calls(max(args.sizes), args.robots)
+
+
+def print_calls(actions: int, robots: int) -> None:
+    profile = cProfile.Profile()
+    clock = VirtualClock()
+    profile.runcall(run, _run(actions, robots, clock), clock)
+    calls = pstats.Stats(profile).total_calls  # type: ignore[attr-defined]
+    print(f"Python function calls (cProfile), {actions} actions: {calls / actions:.0f} per action")
 
 
 def print_parts(actions: int, robots: int) -> None:

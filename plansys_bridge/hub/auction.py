@@ -41,6 +41,7 @@ from plansys_bridge.hub.messages import (
     ExecutionType,
     Topics,
     action_execution,
+    readdressed,
 )
 from plansys_bridge.hub.routing import client_keys
 from plansys_bridge.hub.transport import Subscription
@@ -79,7 +80,6 @@ _REQUEST = ExecutionType.REQUEST
 _REJECT = ExecutionType.REJECT
 _AUCTION = ClientPhase.AUCTION
 _EXECUTING = ClientPhase.EXECUTING
-_new = object.__new__
 
 
 class ActionClient:
@@ -435,17 +435,10 @@ class ActionClient:
         pending, self._pending_bidders = self._pending_bidders, []
         if not pending:
             return
-        fields = action_execution(
+        reject = action_execution(
             _REJECT, "", self.action, self.arguments, request_id=self.request_id
-        ).__dict__
-        rejects: list[object] = []
-        for node in pending:
-            # messages.readdressed, inlined: every bidder but one of an auction gets one
-            reject = _new(ActionExecution)
-            reject.__dict__.update(fields)
-            reject.__dict__["node_id"] = node
-            rejects.append(reject)
-        self.hub.publish_many(Topics.ACTIONS_HUB, rejects)
+        )
+        self.hub.publish_many(Topics.ACTIONS_HUB, [readdressed(reject, node) for node in pending])
 
     def _on_action_msg(self, msg: object) -> None:
         if (
