@@ -155,6 +155,35 @@ class ActionExecutionInfo:
     message_status: str = ""
 
 
+def execution_info(
+    status: ActionStatus,
+    start_stamp: float,
+    status_stamp: float,
+    action_full_name: str,
+    action: str,
+    arguments: tuple[str, ...],
+    duration: float,
+    completion: float,
+    message_status: str,
+) -> ActionExecutionInfo:
+    """``ActionExecutionInfo(...)`` filled in at once, as :func:`action_execution`
+    does: the executor publishes one on every change of an action's state (at least
+    its start and its end), which makes it one of the most built messages of a run."""
+    msg = _new(ActionExecutionInfo)
+    msg.__dict__.update(
+        status=status,
+        start_stamp=start_stamp,
+        status_stamp=status_stamp,
+        action_full_name=action_full_name,
+        action=action,
+        arguments=arguments,
+        duration=duration,
+        completion=completion,
+        message_status=message_status,
+    )
+    return msg
+
+
 @dataclass(frozen=True)
 class ActionPerformerStatus:
     """Performer heartbeat (1 s), published on ``performers_status``."""
