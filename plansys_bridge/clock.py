@@ -37,6 +37,9 @@ __all__ = [
 
 T = TypeVar("T")
 
+_get_running_loop = asyncio._get_running_loop
+"""The running loop or None (``get_running_loop`` without the exception when none)."""
+
 
 @runtime_checkable
 class Clock(Protocol):
@@ -196,6 +199,10 @@ class VirtualClock:
         self._start = float(start)
         self._loop: VirtualTimeEventLoop | None = None
         self._lock = threading.Lock()
+        self._last_running: VirtualTimeEventLoop | None = None
+        """The virtual loop ``now()`` last found running, whose ``time()`` is the
+        base class's: while it still runs, its time is read without asking again
+        what kind of loop it is (an executed action reads the clock about ten times)."""
 
     def new_loop(self) -> VirtualTimeEventLoop:
         loop = VirtualTimeEventLoop(start=self._start)
@@ -208,11 +215,18 @@ class VirtualClock:
         return self._loop
 
     def now(self) -> float:
-        try:
-            running = asyncio.get_running_loop()
-        except RuntimeError:
-            running = None
+        running = _get_running_loop()
+        last = self._last_running
+        if running is last and last is not None:
+            return last._virtual_now
+        return self._now_in(running)
+
+    def _now_in(self, running: asyncio.AbstractEventLoop | None) -> float:
+        """``now()`` when ``running`` is not the loop it last found (a new loop, another
+        thread's, none, or a loop whose ``time()`` is its own)."""
         if isinstance(running, VirtualTimeEventLoop):
+            if type(running).time is VirtualTimeEventLoop.time:
+                self._last_running = running
             return running.time()
         if self._loop is not None:
             return self._loop.time()

@@ -8,6 +8,8 @@ import threading
 import time
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from plansys_bridge.clock import VirtualClock, VirtualTimeEventLoop, WallClock, run
 
@@ -158,3 +160,83 @@ def test_wall_clock_scales_mission_time() -> None:
     assert real >= 0.01 - 1e-3
     with pytest.raises(ValueError):
         WallClock(time_scale=0)
+
+
+def _reference_now(clock: VirtualClock) -> float:
+    """``VirtualClock.now`` as it reads without its remembered loop."""
+    try:
+        running: asyncio.AbstractEventLoop | None = asyncio.get_running_loop()
+    except RuntimeError:
+        running = None
+    if isinstance(running, VirtualTimeEventLoop):
+        return running.time()
+    return clock.loop.time() if clock.loop is not None else clock._start
+
+
+@given(
+    start=st.floats(0.0, 1e6),
+    runs=st.lists(
+        st.tuples(
+            st.sampled_from(["virtual", "plain"]),
+            st.lists(
+                st.tuples(st.sampled_from(["sleep", "advance"]), st.floats(0, 50)), max_size=4
+            ),
+        ),
+        max_size=4,
+    ),
+)
+@settings(max_examples=60, deadline=None)
+def test_now_from_the_remembered_loop_equals_the_general_reading(
+    start: float, runs: list[tuple[str, list[tuple[str, float]]]]
+) -> None:
+    clock = VirtualClock(start)
+    seen: list[tuple[float, float]] = []
+
+    def read() -> None:
+        seen.append((clock.now(), _reference_now(clock)))
+
+    async def virtual(steps: list[tuple[str, float]]) -> None:
+        loop = asyncio.get_running_loop()
+        assert isinstance(loop, VirtualTimeEventLoop)
+        read()
+        for kind, seconds in steps:
+            if kind == "sleep":
+                await asyncio.sleep(seconds)
+            else:
+                loop.advance(seconds)
+            read()
+
+    async def plain() -> None:
+        read()  # a loop of another kind: the last virtual loop's time
+
+    read()  # before any loop
+    for kind, steps in runs:
+        if kind == "virtual":
+            run(virtual(steps), clock)
+        else:
+            asyncio.run(plain())
+        read()  # between loops
+    assert all(fast == general for fast, general in seen), seen
+
+
+def test_a_loop_with_its_own_time_is_asked_every_time() -> None:
+    asked: list[float] = []
+
+    class Watched(VirtualTimeEventLoop):
+        def time(self) -> float:
+            now = super().time() + 0.25
+            asked.append(now)
+            return now
+
+    clock = VirtualClock()
+
+    async def read() -> tuple[float, bool]:
+        before = len(asked)
+        now = clock.now()
+        return now, len(asked) > before
+
+    assert run(read(), clock) == (0.0, False)
+    with asyncio.Runner(loop_factory=Watched) as runner:
+        assert runner.run(read()) == (0.25, True)
+        assert runner.run(read()) == (0.25, True)  # asked again, not remembered
+    assert run(read(), clock) == (0.0, False)  # and a plain virtual loop again
