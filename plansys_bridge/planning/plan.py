@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from plansys_bridge.errors import PlanningError, SourceLocation
 from plansys_bridge.hub.messages import Plan as PlanMsg
@@ -27,23 +27,37 @@ class PlanFormatError(PlanningError):
         super().__init__(f"{location}: {message}" if location else message)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class PlanStep:
-    """One grounded action in a plan: start time, name, arguments, duration."""
+    """One grounded action in a plan: start time, name, arguments, duration.
+
+    Its :attr:`text` is written once, when the step is made: the executor, the DOT
+    view and every log line name an action by it, several times per action, and
+    joining the strings again each time was a measurable part of running a plan.
+    """
 
     time: float
     action: str
     arguments: tuple[str, ...] = ()
     duration: float = 0.0
+    text: str = field(init=False, repr=False, compare=False)
+    """``(move r2d2 a b)``, the action as PlanSys2 writes it."""
+
+    def __init__(
+        self, time: float, action: str, arguments: tuple[str, ...] = (), duration: float = 0.0
+    ) -> None:
+        # Written straight into the instance dict, as a frozen dataclass's own
+        # __init__ would through object.__setattr__ (once per field).
+        d = self.__dict__
+        d["time"] = time
+        d["action"] = action
+        d["arguments"] = arguments
+        d["duration"] = duration
+        d["text"] = "(" + " ".join((action, *arguments)) + ")"
 
     @property
     def end(self) -> float:
         return self.time + self.duration
-
-    @property
-    def text(self) -> str:
-        """``(move r2d2 a b)``, the action as PlanSys2 writes it."""
-        return "(" + " ".join((self.action, *self.arguments)) + ")"
 
     def to_item(self) -> PlanItem:
         return PlanItem(time=self.time, action=self.text, duration=self.duration)
