@@ -268,9 +268,13 @@ class Executor:
             ctx.knowledge_changed(change)
             event.set()
 
+        get_ident, knowledge_changed, wake = threading.get_ident, ctx.knowledge_changed, event.set
+
         def from_knowledge(change: KnowledgeChange) -> None:
-            if threading.get_ident() == loop_thread:
-                changed(change)
+            # changed(), inlined: the loop's thread applies two effects per action
+            if get_ident() == loop_thread:
+                knowledge_changed(change)
+                wake()
             else:
                 loop.call_soon_threadsafe(changed, change)
 

@@ -22,7 +22,7 @@ from plansys_bridge.execution.options import ExecutorOptions
 from plansys_bridge.execution.results import ActionRecord
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome
 from plansys_bridge.hub.hub import Hub
-from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, Topics
+from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, Topics, execution_info
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import Atom, Condition, Effect, FluentRef, FluentValue
@@ -138,10 +138,12 @@ class ActionRuntime:
     may_rest: bool = False
     """The branch is the standard subtree: while its performer works it needs a tick
     only when the performer ends, a deadline passes or what its over-all reads changes."""
+    text: str = ""
+    """The step's text, ``(move r1 a b)``: kept, as records and every info carry it."""
 
-    @property
-    def text(self) -> str:
-        return self.step.text
+    def __post_init__(self) -> None:
+        if not self.text:
+            self.text = self.step.text
 
 
 class PlanContext:
@@ -172,6 +174,9 @@ class PlanContext:
         self.plan_id = plan_id
         self.plan_index = plan_index
         self.on_info = on_info
+        # Mission time is read several times per action: the clock's bound method
+        # saves a call each time.
+        self.now = hub.clock.now  # type: ignore[method-assign]
         self.actions: list[ActionRuntime] = []
         for i, (step, ground) in enumerate(zip(graph.steps, graph.ground, strict=True)):
             record = ActionRecord(
@@ -181,7 +186,7 @@ class PlanContext:
                 planned_duration=step.duration,
                 request_id=f"{plan_id}/{plan_index}/{i}",
             )
-            self.actions.append(ActionRuntime(i, step, ground, record))
+            self.actions.append(ActionRuntime(i, step, ground, record, text=record.text))
         self.draining = False
         """Set on the first failure: no further action starts."""
         self.cancelled = False
@@ -216,7 +221,7 @@ class PlanContext:
 
     # ------------------------------------------------------------ time and wake-ups
 
-    def now(self) -> float:
+    def now(self) -> float:  # replaced per instance by the clock's own now (see __init__)
         """Mission time (the hub's clock)."""
         return self.hub.clock.now()
 
@@ -273,16 +278,17 @@ class PlanContext:
     def publish_info(self, rt: ActionRuntime) -> None:
         self._changed_steps.add(rt.index)
         rec = rt.record
-        info = ActionExecutionInfo(
-            status=rec.status,
-            start_stamp=rec.start if rec.start is not None else 0.0,
-            status_stamp=self.now(),
-            action_full_name=rt.text,
-            action=rt.step.action,
-            arguments=rt.step.arguments,
-            duration=rt.step.duration,
-            completion=rec.completion,
-            message_status=rec.message,
+        step = rt.step
+        info = execution_info(
+            rec.status,
+            rec.start if rec.start is not None else 0.0,
+            self.now(),
+            rt.text,
+            step.action,
+            step.arguments,
+            step.duration,
+            rec.completion,
+            rec.message,
         )
         self.hub.publish(Topics.ACTION_EXECUTION_INFO, info)
         if self.on_info is not None:
@@ -366,8 +372,11 @@ class PlanContext:
         return self._reads[rt.index]
 
     def _moved(self, rt: ActionRuntime) -> None:
+        # activate(), inlined: an action has a few dependents and moves three times
+        actions, active = self.actions, self.active
         for i in self.dependents[rt.index]:
-            self.activate(i)
+            if not actions[i].finished:
+                active.add(i)
 
     def _stop_starting(self) -> None:
         self.draining = True

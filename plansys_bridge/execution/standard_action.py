@@ -22,16 +22,16 @@ a walk through the decorator and two sequences.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from plansys_bridge.errors import PlansysBridgeError
-from plansys_bridge.execution import phases
-from plansys_bridge.execution.phases import ExecutePhase, Phase
+from plansys_bridge.execution import phases, waits
+from plansys_bridge.execution.phases import ExecutePhase
 from plansys_bridge.execution.plan_context import ActionRuntime, PlanContext
-from plansys_bridge.planning.orderings import END, START
+from plansys_bridge.planning.orderings import END, START, Point
 
 __all__ = ["StandardAction"]
 
@@ -41,6 +41,8 @@ _BEFORE_RUN = 3
 
 _END_WAIT = 4
 """The step that waits for the predecessors of the action's end."""
+_PREDECESSORS = phases.PredecessorsPhase.label
+_AT_START_REQ = phases.AtStartReqPhase.label
 _OVER_ALL = phases.OverAllReqPhase.label
 _STATELESS: dict[int, tuple[str, Callable[[PlanContext, ActionRuntime], Status]]] = {
     2: (phases.AtStartEffectPhase.label, phases.apply_at_start_effect),
@@ -48,6 +50,7 @@ _STATELESS: dict[int, tuple[str, Callable[[PlanContext, ActionRuntime], Status]]
     6: (phases.AtEndEffectPhase.label, phases.apply_at_end_effect),
 }
 """The steps that keep no state, by index: their label (for an error) and step."""
+_LAST = 6
 
 
 class StandardAction(Behaviour):
@@ -60,22 +63,18 @@ class StandardAction(Behaviour):
         self.rt = rt
         self._step = 0
         """Index of the current phase; ``_BEFORE_RUN`` is the run."""
-        self._phase: Phase | None = None
+        self._entered = False
+        """Whether the current waiting step was entered (its state set up)."""
+        self._waits: Sequence[tuple[int, Point]] = ()
+        self._next = 0
+        """The predecessor wait's state: its waits and how far it got."""
+        self._deadline: float | None = None
+        self._timeout: float | None = None
+        """The at-start wait's state."""
         self._guarded = False
         """Whether the guards of the run are set up (``_overrun`` then is one)."""
         self._overrun: phases.OverrunPhase | None = None
         self._execution: ExecutePhase | None = None
-
-    def _make(self, step: int) -> Phase | None:
-        """The phase object of a step that keeps state (see ``_STATELESS``)."""
-        ctx, rt = self.ctx, self.rt
-        if step == 0:
-            return phases.PredecessorsPhase(ctx, rt, START)
-        if step == 1:
-            return phases.AtStartReqPhase(ctx, rt, ctx.options.at_start_timeout_for(rt.step.action))
-        if step == _END_WAIT:
-            return phases.PredecessorsPhase(ctx, rt, END)
-        return None
 
     def tick(self) -> Iterator[Behaviour]:
         """py_trees' ``Behaviour.tick`` (see :meth:`tick_step`), as the generator
@@ -104,10 +103,11 @@ class StandardAction(Behaviour):
         return Status.SUCCESS
 
     def _advance(self) -> Status:
-        """Step through the phases until one is RUNNING or fails. A step that keeps
-        no state is a plain function call (no phase object); a phase is stepped
-        directly (``Phase.step``, with ``Phase.run``'s error handling inline) and
-        entered only when it has something to do on entry."""
+        """Step through the phases until one is RUNNING or fails. The waiting steps
+        keep their state in this object's fields (:mod:`plansys_bridge.execution.waits`),
+        the others keep none: every step is a plain function call, no phase object
+        is made before the run, and ``Phase.run``'s error handling is inline."""
+        ctx, rt = self.ctx, self.rt
         while True:
             step = self._step
             if step == _BEFORE_RUN:
@@ -115,29 +115,41 @@ class StandardAction(Behaviour):
             elif step in _STATELESS:
                 label, function = _STATELESS[step]
                 try:
-                    status = function(self.ctx, self.rt)
+                    status = function(ctx, rt)
                 except PlansysBridgeError as exc:
-                    self.rt.reason = f"{label}: {exc}"
+                    rt.reason = f"{label}: {exc}"
                     status = Status.FAILURE
+            elif step > _LAST:
+                return Status.SUCCESS  # every phase is over
             else:
-                phase = self._phase
-                if phase is None:
-                    if step == _END_WAIT and not self.ctx.graph.waits(self.rt.index, END):
-                        self._step = step + 1  # nothing to wait for: the phase would succeed
-                        continue
-                    phase = self._phase = self._make(step)
-                    if phase is None:
-                        return Status.SUCCESS
-                    if phase.enters:
-                        phase.initialise()
                 try:
-                    status = phase.step()
+                    status = self._wait(step)
                 except PlansysBridgeError as exc:
-                    status = phase.fail(f"{phase.label}: {exc}")
+                    label = _AT_START_REQ if step == 1 else _PREDECESSORS
+                    rt.reason = f"{label}: {exc}"
+                    status = Status.FAILURE
             if status != Status.SUCCESS:
                 return status
             self._step = step + 1
-            self._phase = None
+            self._entered = False
+
+    def _wait(self, step: int) -> Status:
+        """The waiting steps: predecessors of the start (0), the at-start
+        requirement (1), predecessors of the end (``_END_WAIT``)."""
+        ctx, rt = self.ctx, self.rt
+        if step == 1:
+            if not self._entered:
+                self._entered = True
+                self._timeout = ctx.options.at_start_timeout_for(rt.step.action)
+                self._deadline = waits.at_start_deadline(ctx, rt, self._timeout)
+            return waits.wait_at_start_req(ctx, rt, self._deadline, self._timeout)
+        point = START if step == 0 else END
+        if not self._entered:
+            self._entered = True
+            self._waits = ctx.graph.waits(rt.index, point)
+            self._next = 0
+        status, self._next = waits.wait_for_predecessors(ctx, rt, point, self._waits, self._next)
+        return status
 
     def _run(self) -> Status:
         """The reactive part: guards first (the overrun, then the over-all
