@@ -2,25 +2,33 @@
 
 Nearly every sample on the hub's DDS topics is an ``ActionExecution``: an auction
 among N bidders is a REQUEST, N RESPONSEs, a CONFIRM and N-1 REJECTs, all naming the
-same action and arguments. The generated codec of :mod:`~plansys_bridge.hub.dds_wire`
-writes and reads every field of every sample; here the part of a sample after its
-node name (action, arguments, success, completion, status: the "body") is written
-once per distinct body and read once per distinct body bytes, and a wrapped message
-(``plansys_bridge_msgs/ActionExecution``) is written from and read into the hub's
-:class:`~plansys_bridge.hub.messages.ActionExecution` without the wrapper object.
+same action and arguments (and, wrapped, the same request id). The generated codec
+of :mod:`~plansys_bridge.hub.dds_wire` writes and reads every field of every sample;
+here what varies inside one auction (``type``, node name, bid) is written and read
+per sample, and the rest is written once per distinct value and read once per
+distinct bytes. A wrapped message (``plansys_bridge_msgs/ActionExecution``) is
+written from and read into the hub's :class:`~plansys_bridge.hub.messages.ActionExecution`
+without the wrapper object.
 
-Why the body can be kept: it starts 4-aligned right after the node name and holds
-no 8-byte field, so its bytes depend on its own fields only, and reading the same
-bytes from a 4-aligned offset always gives the same fields and the same length. The
-bytes are exactly those of the generated codec (a test compares them, and the
-generated codec is compared with Cyclone's own serialiser).
+Why the parts can be kept:
+
+* the front (encapsulation header, ``type``, node name) ends 4-aligned, and the
+  body after it (action, arguments, success, completion, status, padded to 4) holds
+  no 8-byte field, so the bytes of each depend on its own fields only;
+* reading, the bytes after the node name up to the bid (the whole rest of a plain
+  sample) give the same fields whenever they are the same bytes at an offset of the
+  same remainder modulo 8 (the padding before the bid depends on it), and the sample
+  then ends with the bid: a kept entry is used only for such a sample, and only
+  samples read to their last byte are kept.
+
+The bytes are exactly those of the generated codec (a property test compares them,
+and the generated codec is compared with Cyclone's own serialiser).
 """
 
 from __future__ import annotations
 
 import math
 import struct
-import threading
 from collections.abc import Callable
 from functools import lru_cache
 from typing import Any
@@ -42,21 +50,27 @@ _F64 = struct.Struct("<d")
 _BOOL = struct.Struct("<?")
 _KINDS = {kind.value: kind for kind in hm.ExecutionType}
 _KNOWN = ", ".join(f"{kind.name}={kind.value}" for kind in hm.ExecutionType)
-_BODY_CACHE = 1024
+_CACHE = 4096
+"""Writing: parts kept per cache (one per node name, a few per action and request)."""
+_KEPT = 1024
+"""Reading: rests kept per reader (a few per auction)."""
+
+# -- writing --------------------------------------------------------------------------------
 
 
-@lru_cache(maxsize=64)
-def _head(kind: int) -> bytes:
-    """Encapsulation header, ``type`` and the padding before the node name."""
-    return _HEADER + _I16.pack(kind) + b"\x00\x00"
+@lru_cache(maxsize=_CACHE)
+def _front(kind: int, node_id: str) -> bytes:
+    """Encapsulation header, ``type``, its padding and the node name, padded to 4."""
+    node = string_bytes(node_id)
+    return _HEADER + _I16.pack(kind) + b"\x00\x00" + node + _ZEROS[-len(node) & 3]
 
 
-@lru_cache(maxsize=_BODY_CACHE)
+@lru_cache(maxsize=_CACHE)
 def _body(
     action: str, arguments: tuple[str, ...], success: bool, completion: bytes, status: str
 ) -> bytes:
     """Action, arguments, success, completion (packed: 0.0 and -0.0 are equal keys but
-    not equal bytes) and status from a 4-aligned offset."""
+    not equal bytes) and status from a 4-aligned offset, padded to 4."""
     out = bytearray(string_bytes(action))
     out += _ZEROS[-len(out) & 3]
     out += strings_bytes(arguments)
@@ -64,46 +78,32 @@ def _body(
     out += _ZEROS[-len(out) & 3]
     out += completion
     out += string_bytes(status)
+    out += _ZEROS[-len(out) & 3]
     return bytes(out)
 
 
+# After the request id: ``has_bid``, the padding to 8 (counted from after the 4-byte
+# encapsulation header) and, without a bid, the 0.0 in its place; by the length so
+# far modulo 8 (header included).
+_BID_FLAG = tuple(b"\x01" + _ZEROS[-(n - 3) & 7] for n in range(8))
+_NO_BID = tuple(b"\x00" + _ZEROS[-(n - 3) & 7] + _F64.pack(0.0) for n in range(8))
+
+
 def _write_plain(msg: hm.ActionExecution) -> bytes:
-    node = string_bytes(msg.node_id)
-    body = _body(
-        msg.action, msg.arguments, bool(msg.success), _F32.pack(msg.completion), msg.status
+    return _front(msg.type, msg.node_id) + _body(
+        msg.action, msg.arguments, msg.success, _F32.pack(msg.completion), msg.status
     )
-    offset = 4 + len(node)
-    pad = -offset & 3
-    offset += pad + len(body)
-    return b"".join((_head(msg.type), node, _ZEROS[pad], body, _ZEROS[-offset & 3]))
 
 
 def _write_wrapped(msg: hm.ActionExecution) -> bytes:
-    node = string_bytes(msg.node_id)
-    body = _body(
-        msg.action, msg.arguments, bool(msg.success), _F32.pack(msg.completion), msg.status
-    )
+    front = _front(msg.type, msg.node_id)
+    body = _body(msg.action, msg.arguments, msg.success, _F32.pack(msg.completion), msg.status)
     request = string_bytes(msg.request_id)
+    at = (len(front) + len(body) + len(request)) & 7
     bid = msg.bid
-    offset = 4 + len(node)  # offsets count from after the encapsulation header
-    pad = -offset & 3
-    offset += pad + len(body)
-    pad_request = -offset & 3
-    offset += pad_request + len(request) + 1
-    pad_bid = -offset & 7
-    return b"".join(
-        (
-            _head(msg.type),
-            node,
-            _ZEROS[pad],
-            body,
-            _ZEROS[pad_request],
-            request,
-            b"\x00" if bid is None else b"\x01",
-            _ZEROS[pad_bid],
-            _F64.pack(0.0 if bid is None else bid),
-        )
-    )
+    if bid is None:
+        return b"".join((front, body, request, _NO_BID[at]))
+    return b"".join((front, body, request, _BID_FLAG[at], _F64.pack(bid)))
 
 
 def execution_writer(ros_type: str) -> Callable[[hm.ActionExecution], bytes]:
@@ -132,8 +132,8 @@ def _string(data: bytes, p: int, size: int) -> tuple[str, int]:
     return data[p + 4 : end - 1].decode(), end
 
 
-def _read_body(data: bytes, p: int, size: int) -> tuple[tuple[Any, ...], int]:
-    """(action, arguments, success, completion, status) at 4-aligned ``p``, and its end."""
+def _read_body(data: bytes, p: int, size: int) -> tuple[dict[str, Any], int]:
+    """The fields action .. status at 4-aligned ``p``, and the offset after them."""
     action, p = _string(data, p, size)
     p += -p & 3
     count = _U32.unpack_from(data, p)[0]
@@ -152,36 +152,34 @@ def _read_body(data: bytes, p: int, size: int) -> tuple[tuple[Any, ...], int]:
     if not math.isfinite(completion):
         raise ValueError(f"{PLAIN}.completion is {completion!r}, not a finite number")
     status, p = _string(data, p + 4, size)
-    return (action, tuple(arguments), success, completion, status), p
+    fields = {
+        "type": None,
+        "node_id": None,
+        "action": action,
+        "arguments": tuple(arguments),
+        "success": success,
+        "completion": completion,
+        "status": status,
+        "bid": None,
+        "request_id": "",
+    }
+    return fields, p
 
 
-class _Bodies:
-    """Bodies read so far, by their bytes (see the module docs for why that is safe).
-
-    Shared by the reader threads of every transport of the process (the channels
-    are), so the lengths to try are an immutable tuple replaced under a lock.
-    """
-
-    def __init__(self) -> None:
-        self._fields: dict[bytes, tuple[Any, ...]] = {}
-        self._lengths: tuple[int, ...] = ()
-        """Lengths of the bodies kept, most recent first (a few at a time in practice)."""
-        self._lock = threading.Lock()
-
-    def read(self, data: bytes, p: int, size: int) -> tuple[tuple[Any, ...], int]:
-        fields = self._fields
-        for length in self._lengths:
-            found = fields.get(data[p : p + length])
-            if found is not None:
-                return found, p + length
-        found, end = _read_body(data, p, size)
-        with self._lock:
-            if len(fields) >= _BODY_CACHE:
-                fields.clear()
-            fields[data[p:end]] = found
-            others = [n for n in self._lengths if n != end - p]
-            self._lengths = (end - p, *others[:7])
-        return found, end
+def _read_rest(data: bytes, p: int, size: int, wrapped: bool) -> tuple[dict[str, Any], int]:
+    """The fields after the node name (all but ``type``, ``node_id`` and ``bid``, in
+    their order) and where the bid is (the end, for a plain sample)."""
+    fields, p = _read_body(data, p, size)
+    if wrapped:
+        p += -p & 3
+        fields["request_id"], p = _string(data, p, size)
+        # has_bid where the bid goes: the reader puts the bid (or None) there
+        fields["bid"] = _BOOL.unpack_from(data, p)[0]
+        p += 1
+        p += -(p - 4) & 7  # 8-aligned counting from after the header
+    else:
+        p += -p & 3  # Cyclone pads a sample to 4 bytes
+    return fields, p
 
 
 def execution_reader(
@@ -190,47 +188,58 @@ def execution_reader(
     """bytes of a ``ros_type`` sample (PLAIN or WRAPPED) -> the hub ActionExecution.
 
     Checks as the generated reader does (a known ``type``, finite numbers; ``ValueError``
-    otherwise); a sample in another representation goes to ``fallback``. One reader
-    serves one thread (the transport's reader thread).
+    otherwise); a sample in another representation goes to ``fallback``. The kept
+    parts (see the module docs) live in plain dictionaries, looked up and filled in
+    single steps: reader threads of several transports may share one reader.
     """
     wrapped = ros_type == WRAPPED
-    bodies = _Bodies()
+    kept: tuple[dict[bytes, dict[str, Any]], ...] = ({}, {})
+    """By the remainder modulo 8 of where the rest starts (0 or 4): its bytes -> fields."""
+    new = object.__new__
+    cls = hm.ActionExecution
+    unpack_u32 = _U32.unpack_from
+    unpack_i16 = _I16.unpack_from
+    unpack_f64 = _F64.unpack_from
+    isfinite = math.isfinite
 
     def read(data: bytes) -> hm.ActionExecution:
         if data[:2] != XCDR1_LE:
             return fallback(data)
         size = len(data)
         try:
-            value = _I16.unpack_from(data, 4)[0]
-            kind = _KINDS.get(value)
+            kind = _KINDS.get(unpack_i16(data, 4)[0])
             if kind is None:
+                value = unpack_i16(data, 4)[0]
                 raise ValueError(f"{PLAIN}.type is {value!r}, not one of {_KNOWN}")
-            node, p = _string(data, 8, size)
+            n = unpack_u32(data, 8)[0]
+            p = 12 + n
+            if n == 0 or p > size:
+                raise ValueError(f"string length {n} past the end")
+            node = data[12 : p - 1].decode()
             p += -p & 3
-            (action, arguments, success, completion, status), p = bodies.read(data, p, size)
-            request_id, bid = "", None
+            end = size - 8 if wrapped else size
+            table = kept[(p & 4) >> 2]
+            fields = table.get(data[p:end])
+            if fields is None:
+                fields, at = _read_rest(data, p, size, wrapped)
+                if at == end:  # read to its last byte: the bytes tell the fields
+                    if len(table) >= _KEPT:
+                        table.clear()
+                    table[data[p:end]] = fields
+            else:
+                at = end
+            msg = new(cls)
+            vars_ = msg.__dict__
+            vars_.update(fields)
+            vars_["type"] = kind
+            vars_["node_id"] = node
             if wrapped:
-                p += -p & 3
-                request_id, p = _string(data, p, size)
-                has_bid = _BOOL.unpack_from(data, p)[0]
-                p += 1
-                p += -(p - 4) & 7  # 8-aligned counting from after the header
-                value = _F64.unpack_from(data, p)[0]
-                if not math.isfinite(value):
-                    raise ValueError(f"{WRAPPED}.bid is {value!r}, not a finite number")
-                bid = value if has_bid else None
+                bid = unpack_f64(data, at)[0]
+                if not isfinite(bid):
+                    raise ValueError(f"{WRAPPED}.bid is {bid!r}, not a finite number")
+                vars_["bid"] = bid if fields["bid"] else None
         except (struct.error, IndexError, UnicodeDecodeError) as exc:
             raise ValueError(f"{ros_type}: malformed sample: {exc}") from exc
-        return hm.action_execution(
-            kind,
-            node,
-            action,
-            arguments,
-            success=success,
-            completion=completion,
-            status=status,
-            bid=bid,
-            request_id=request_id,
-        )
+        return msg
 
     return read

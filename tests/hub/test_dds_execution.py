@@ -91,3 +91,49 @@ def test_bad_samples_are_refused_as_the_generated_reader_refuses_them() -> None:
         next(c for c in ROUTE.channels if c.ros_type == WRAPPED).read(
             wrapper.serialize(use_version_2=False)
         )
+
+
+def test_a_kept_rest_is_used_only_at_the_same_remainder_modulo_8() -> None:
+    """Node names 4 bytes apart in length move the rest by 4: the padding before the
+    bid differs, so the same rest bytes must not be taken for the other's."""
+    read = next(c for c in ROUTE.channels if c.ros_type == WRAPPED).read
+    to_wrapped = ROUTE.to_bytes[1]
+    assert to_wrapped is not None
+    for request_id in ("", "r", "rq", "req", "req-", "req-1", "req-12", "req-123"):
+        sent = [
+            hm.ActionExecution(
+                hm.ExecutionType.RESPONSE, node, "move", ("r", "a"), bid=bid, request_id=request_id
+            )
+            for node in ("p1", "p1234", "p1", "p12345678")
+            for bid in (None, 2.5)
+        ]
+        for msg in sent * 2:
+            data = to_wrapped(msg)
+            assert read(data) == msg == _generic_read(WRAPPED, data)
+        # A rest kept at one remainder, after a node name 4 bytes longer: to the
+        # generated reader the bid is elsewhere (or past the end).
+        short = to_wrapped(sent[1])  # node "p1": the rest starts at byte 16
+        moved = to_wrapped(sent[2])[:20] + short[16:]  # node "p1234": at byte 20
+        read(short)
+        try:
+            expected = _generic_read(WRAPPED, moved)
+        except ValueError:
+            with pytest.raises(ValueError):
+                read(moved)
+        else:
+            assert read(moved) == expected
+
+
+def test_bytes_after_a_samples_end_are_ignored_and_not_kept() -> None:
+    """As the generated reader: what follows the last field does not change the message."""
+    for channel, write in zip(ROUTE.channels, ROUTE.to_bytes, strict=True):
+        assert write is not None
+        msg = hm.ActionExecution(
+            hm.ExecutionType.RESPONSE, "p7", "move", ("r",), bid=1.5, request_id="q"
+        )
+        data = write(msg)
+        for extra in (b"\x00" * 4, b"\x01" * 8, b"\x02" * 12):
+            for _twice in range(2):
+                longer = data + extra
+                assert channel.read(longer) == _generic_read(channel.ros_type, longer)
+                assert channel.read(data) == _generic_read(channel.ros_type, data)
