@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -169,11 +168,14 @@ class DdsTransport:
         self._endpoints: list[_Endpoint] = []
         self._writers: dict[str, tuple[_Endpoint, _Endpoint | None]] = {}
         self._out: dict[str, tuple[Route, Writer, Writer | None, int, int | None]] = {}
-        """Per hub topic: its route, what writes its bytes, and the DDS writers' references."""
-        self._rematch = threading.Event()
+        """Per hub topic with a DDS type: its route, what writes its bytes, and the DDS
+        writers' references; filled while the transport runs (started, not closing),
+        so that one look-up tells publish() that it may write."""
+        self._matches_changed = False
         """Set by DDS when a writer's matched readers change: look for foreign readers."""
-        self._foreign_readers: dict[str, bool] = {}
-        """Per wrapped hub topic: does a reader outside the project read its plain topic?"""
+        self._plain_copy: dict[str, bool] = {}
+        """Per wrapped hub topic: must the plain sample be written too (a reader outside
+        the project reads the plain topic, or the topic is latched)? Unknown: yes."""
         self._project_writers: set[int] = set()
         self._loop: asyncio.AbstractEventLoop | None = None
         self._dds = DdsParticipant(self.domain_id, self.config, f"dds-hub-{self.domain_id}")
@@ -199,14 +201,17 @@ class DdsTransport:
         self._loop = loop
         await self._fanout.start()
         try:
-            self._open()
+            out = self._open()
         except BaseException:
             self._teardown()
             raise
         self._dds.start(self._poll)
+        self._out = out
 
-    def _open(self) -> None:
+    def _open(self) -> dict[str, tuple[Route, Writer, Writer | None, int, int | None]]:
+        """Join the domain and make every endpoint; return what publish() needs per topic."""
         self._dds.open()
+        out = {}
         try:
             for route in ROUTES.values():
                 made = []
@@ -217,7 +222,7 @@ class DdsTransport:
                 project = made[1] if len(made) > 1 else None
                 self._writers[route.hub_topic] = (made[0], project)
                 plain, wrapped = route.to_bytes
-                self._out[route.hub_topic] = (
+                out[route.hub_topic] = (
                     route,
                     plain,
                     wrapped,
@@ -232,20 +237,26 @@ class DdsTransport:
             )
         except DDSException as exc:
             raise HubError(f"DDS domain {self.domain_id}: cannot create endpoints: {exc}") from exc
+        return out
 
     def _endpoint(self, route: Route, channel: Channel) -> _Endpoint:
         p = self._dds.participant
         topic = Topic(p, channel.dds_topic, channel.idl_type)
         marked = not channel.project and route.project is not None
-        listener = Listener(on_publication_matched=lambda *_: self._rematch.set())
+        listener = Listener(on_publication_matched=self._on_matched)
         writer = DataWriter(p, topic, _qos(channel, marked=marked), listener=listener)
         reader = DataReader(p, topic, _qos(channel, reader=True))
         condition = ReadCondition(reader, _ANY_SAMPLE)
         self._dds.attach(condition)
         return _Endpoint(route, channel, topic, writer, reader, condition)
 
+    def _on_matched(self, *_: object) -> None:
+        """On a DDS thread: a writer's matched readers changed (see :meth:`_plain_needed`)."""
+        self._matches_changed = True
+
     async def close(self) -> None:
         self._closed = True
+        self._out = {}  # publish() refuses from now on
         await self._fanout.close()
         self._teardown()
 
@@ -257,7 +268,7 @@ class DdsTransport:
         self._dds.close(entities)
         self._endpoints.clear()
         self._writers.clear()
-        self._out.clear()
+        self._out = {}
 
     @property
     def closed(self) -> bool:
@@ -281,13 +292,9 @@ class DdsTransport:
         return self._fanout.subscriber_count(topic)
 
     def publish(self, topic: str, msg: object) -> None:
-        if self._closed:
-            raise HubError(f"cannot publish on {topic!r}: transport closed")
-        if not self._dds.running or self._loop is None:
-            raise HubError(f"cannot publish on {topic!r}: start the DDS transport first")
         out = self._out.get(topic)
-        if out is None:
-            self._publish_local(topic, msg)
+        if out is None:  # not running, or a topic without a DDS type
+            self._publish_unrouted(topic, msg)
             return
         route, plain, wrapped, plain_ref, project_ref = out
         if not isinstance(msg, route.accepts):
@@ -295,7 +302,10 @@ class DdsTransport:
         try:
             if project_ref is not None and wrapped is not None:
                 _checked(ddspy_write(project_ref, wrapped(msg)), route.project)
-                if self._plain_needed(route):
+                # the plain copy is skipped with one look-up while nothing changed
+                if (self._matches_changed or self._plain_copy.get(topic, True)) and (
+                    self._plain_needed(route)
+                ):
                     _checked(ddspy_write(plain_ref, plain(msg)), route.plain)
             else:
                 _checked(ddspy_write(plain_ref, plain(msg)), route.plain)
@@ -315,16 +325,14 @@ class DdsTransport:
         joiner of a latched topic. Which readers are matched is looked at again only
         after DDS reported a change.
         """
-        if route.plain.qos.transient_local:
-            return True
-        if self._rematch.is_set():
-            self._rematch.clear()
-            self._foreign_readers = {
-                r.hub_topic: self._has_foreign_reader(r)
+        if self._matches_changed:
+            self._matches_changed = False
+            self._plain_copy = {
+                r.hub_topic: r.plain.qos.transient_local or self._has_foreign_reader(r)
                 for r in ROUTES.values()
                 if r.project is not None
             }
-        return self._foreign_readers.get(route.hub_topic, True)
+        return self._plain_copy.get(route.hub_topic, True)
 
     def _has_foreign_reader(self, route: Route) -> bool:
         """Is a reader of ``route``'s plain topic in a participant not reading its wrapper?"""
@@ -335,7 +343,13 @@ class DdsTransport:
         plain = _reader_participants(plain_ep.writer)
         return None in plain or not plain <= project
 
-    def _publish_local(self, topic: str, msg: object) -> None:
+    def _publish_unrouted(self, topic: str, msg: object) -> None:
+        """Refuse to publish before start and after close; deliver a topic without a DDS
+        type inside this process only."""
+        if self._closed:
+            raise HubError(f"cannot publish on {topic!r}: transport closed")
+        if not self._dds.running or self._loop is None:
+            raise HubError(f"cannot publish on {topic!r}: start the DDS transport first")
         if topic not in self._warned_local:
             self._warned_local.add(topic)
             log.warning(
@@ -390,6 +404,7 @@ class DdsTransport:
         topic = ep.route.hub_topic
         read = ep.channel.read
         check = self._check
+        append = batch.append
         while True:
             samples = ddspy_take(ep.reader._ref, _ANY_SAMPLE, _TAKE_BATCH)
             if isinstance(samples, int):  # pragma: no cover - a reader deleted under us
@@ -407,7 +422,7 @@ class DdsTransport:
                 except Exception as exc:  # a foreign writer's malformed sample
                     reason = str(exc)
                 if reason is None:
-                    batch.append((topic, msg))
+                    append((topic, msg))
                     continue
                 self.dropped += 1
                 log.warning(
