@@ -121,7 +121,7 @@ class ExecuteAction(ActionBehaviour):
         return self.execution.client
 
     @property
-    def task(self) -> asyncio.Task[ActionOutcome] | None:
+    def task(self) -> asyncio.Future[ActionOutcome] | None:
         return self.execution.task
 
 

@@ -23,6 +23,7 @@ They read the knowledge through snapshots and change it only through
 from __future__ import annotations
 
 import asyncio
+from functools import partial
 
 from py_trees.common import Status
 
@@ -198,10 +199,16 @@ def check_over_all_req(ctx: PlanContext, rt: ActionRuntime) -> Status:
 class ExecutePhase(Phase):
     """Hand the action to a performer through the auction and follow it.
 
-    ``initialise`` starts an :class:`ActionClient` task; its completion wakes the
+    ``initialise`` starts an :class:`ActionClient` (:meth:`ActionClient.start_soon`:
+    its first REQUEST goes out where a task running it would have sent it, after
+    the tick) and keeps the future of its outcome; the end of that future wakes the
     executor, so the next tick sees the outcome at once. Halting (over-all
     violation, timeout, cancel) cancels the client, which sends CANCEL to the
     performer.
+
+    No task runs the client: its work is driven by hub messages and its timer, and a
+    task per action cost a task object, a step to start it, a wake-up when the
+    outcome was set and a done-callback round on top of the future it awaited.
     """
 
     label = "ExecuteAction"
@@ -209,32 +216,29 @@ class ExecutePhase(Phase):
     def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
         super().__init__(ctx, rt)
         self.client: ActionClient | None = None
-        self.task: asyncio.Task[ActionOutcome] | None = None
+        self.task: asyncio.Future[ActionOutcome] | None = None
+        """The outcome future (a future, not a task; the name is the executor's)."""
 
     def initialise(self) -> None:
         ctx, rt = self.ctx, self.rt
-        self.client = ActionClient(
+        client = self.client = rt.client = ActionClient(
             ctx.hub,
             rt.step.action,
             rt.step.arguments,
             request_id=rt.record.request_id,
             policy=ctx.options.auction,
         )
-        rt.client = self.client
-        self.task = asyncio.get_running_loop().create_task(
-            self.client.run(
-                lambda c, s: ctx.feedback(rt, c, s),
-                confirm_cb=lambda node: ctx.confirmed(rt, node),
-            ),
-            name=f"execute {rt.record.request_id}",
+        # partials, not lambdas: a callback is then one Python call, not two
+        future = self.task = client.start_soon(
+            partial(ctx.feedback, rt), confirm_cb=partial(ctx.confirmed, rt)
         )
         # tracked as PlanContext.track does, with one done callback instead of two:
         # the loop then schedules one call, not two, when the execution ends
-        ctx.tasks.add(self.task)
-        self.task.add_done_callback(self._ended)
+        ctx.tasks.add(future)  # type: ignore[arg-type]  # cancelled/gathered like a task
+        future.add_done_callback(self._ended)
 
-    def _ended(self, task: asyncio.Task[ActionOutcome]) -> None:
-        self.ctx.tasks.discard(task)
+    def _ended(self, future: asyncio.Future[ActionOutcome]) -> None:
+        self.ctx.tasks.discard(future)
         self.ctx.resume(self.rt.index)
         self.ctx.wake()
 

@@ -18,21 +18,27 @@ Only loop time is used (``loop.time()``, ``call_at``), so the client runs unchan
 the wall clock and on the virtual clock.
 
 The client is driven by its messages and one timer: each message is handled as the
-hub delivers it (a RESPONSE may confirm at once), and ``run()`` awaits only the
-outcome. A coroutine that woke for every message cost a task step, a future and a
-timer per wait, several times what handling the message costs.
+hub delivers it (a RESPONSE may confirm at once). A coroutine that woke for every
+message cost a task step, a future and a timer per wait, several times what handling
+the message costs; ``start()`` hands out the outcome future without even one task.
 """
 
 from __future__ import annotations
 
 import asyncio
-import enum
 import itertools
 import math
 from collections.abc import Callable, Sequence
 
 from plansys_bridge.errors import HubError
-from plansys_bridge.hub.auction_policy import ActionOutcome, AuctionPolicy, full_action_name
+from plansys_bridge.hub.auction_policy import (
+    ActionOutcome,
+    AuctionPolicy,
+    ClientPhase,
+    FeedbackCallback,
+    full_action_name,
+)
+from plansys_bridge.hub.driven_future import DrivenFuture
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.liveness import LivenessTable, could_serve
 from plansys_bridge.hub.messages import (
@@ -55,23 +61,10 @@ __all__ = [
     "full_action_name",
 ]
 
-FeedbackCallback = Callable[[float, str], None]
-"""Called as ``feedback_cb(completion, status)`` for every FEEDBACK of the confirmed performer."""
-
 _request_ids = itertools.count(1)
 
 
-class ClientPhase(enum.Enum):
-    NEW = "new"
-    AUCTION = "auction"
-    EXECUTING = "executing"
-    DONE = "done"
-
-
 _INCOMING = frozenset({ExecutionType.RESPONSE, ExecutionType.FEEDBACK, ExecutionType.FINISH})
-_LISTENING = (ClientPhase.AUCTION, ClientPhase.EXECUTING)
-"""A tuple, not a set: ``in`` tries identity first, where a set hashes a plain Enum
-member in Python."""
 _RESPONSE = ExecutionType.RESPONSE
 """Read once: an enum member read off its class costs about 0.3 us on Python 3.11,
 and the bidding compares every RESPONSE of an auction with it."""
@@ -82,7 +75,7 @@ _AUCTION = ClientPhase.AUCTION
 _EXECUTING = ClientPhase.EXECUTING
 
 
-class ActionClient:
+class ActionClient(DrivenFuture[ActionOutcome]):
     """Runs the auction for one action instance and follows it to its end.
 
     ``await run()`` returns an :class:`ActionOutcome` (it never raises for a failed
@@ -113,8 +106,6 @@ class ActionClient:
         self._cancel_requested = False
         self._cancel_sent_to: str | None = None
         self._last_seen = 0.0
-        self._loop: asyncio.AbstractEventLoop
-        """The running loop, set by ``run()``: only what runs after it reads it."""
         self._pending_bidders: list[str] = []
         self._confirm_cb: Callable[[str], None] | None = None
         self._feedback_cb: FeedbackCallback | None = None
@@ -123,7 +114,6 @@ class ActionClient:
         self._liveness: LivenessTable | None = None
         self._unwatch: Callable[[], None] = _nothing
         self._sub: Subscription | None = None
-        self._done: asyncio.Future[ActionOutcome] | None = None
         self._timer: asyncio.TimerHandle | None = None
         self._timer_at = math.inf
         # the action's auctions (one, more after a lost performer)
@@ -146,8 +136,6 @@ class ActionClient:
     def __repr__(self) -> str:
         return f"<ActionClient {self.full_name} [{self.request_id}] {self.phase.value}>"
 
-    # ------------------------------------------------------------------ public API
-
     async def run(
         self,
         feedback_cb: FeedbackCallback | None = None,
@@ -157,30 +145,57 @@ class ActionClient:
         """Auction the action, follow its performer, and return how it ended.
 
         ``confirm_cb(node_name)`` is called each time a performer is confirmed (again
-        after a re-auction): the moment the action really starts executing.
-        """
-        if self.phase is not ClientPhase.NEW:
+        after a re-auction): the moment the action really starts executing."""
+        if self._done is not None:
             raise HubError(f"{self!r}: run() may be called only once")
-        self._confirm_cb = confirm_cb
-        self._feedback_cb = feedback_cb
-        loop = self._loop = asyncio.get_running_loop()
+        return await self.start(feedback_cb, confirm_cb=confirm_cb)
+
+    def start(
+        self,
+        feedback_cb: FeedbackCallback | None = None,
+        *,
+        confirm_cb: Callable[[str], None] | None = None,
+    ) -> asyncio.Future[ActionOutcome]:
+        """What :meth:`run` does, without a task (see :mod:`.driven_future`): send the
+        first REQUEST now and return the future of the outcome. Cancelling it stops
+        the action as cancelling run()'s task does: pending bidders get a REJECT, the
+        confirmed performer a CANCEL."""
+        done = self._open("start()")
+        self._confirm_cb, self._feedback_cb = confirm_cb, feedback_cb
+        exc = self._begin(done)
+        if exc is not None:
+            raise exc
+        return done
+
+    def start_soon(
+        self,
+        feedback_cb: FeedbackCallback | None = None,
+        *,
+        confirm_cb: Callable[[str], None] | None = None,
+    ) -> asyncio.Future[ActionOutcome]:
+        """:meth:`start`, with the subscription and the first REQUEST made in a loop
+        callback scheduled now: where a task made to await :meth:`run` took its first
+        step. The executor starts actions from within a tick that may still halt them
+        (a failure with ``halt_on_failure``): a halted action then sends nothing, and
+        the hub sees the messages in the order a task gave, for one loop callback
+        instead of three."""
+        done = self._open("start_soon()")
+        self._confirm_cb, self._feedback_cb = confirm_cb, feedback_cb
+        self._loop.call_soon(self._begin_soon, done)
+        return done
+
+    def _launch(self) -> None:
         self._liveness = self.hub.liveness
-        done: asyncio.Future[ActionOutcome] = loop.create_future()
-        self._done = done
         keys = client_keys(self.request_id, self.action, self.arguments)
         self._sub = self.hub.subscribe(Topics.ACTIONS_HUB, self._on_action_msg, keys=keys)
-        try:
-            self._begin_auction()
-            return await done
-        except BaseException:
-            # Cancelled from outside (a halted behaviour tree) or a failing callback:
-            # never leave a performer working, or one committed to us, behind.
-            self._reject_pending()
-            if self.phase is _EXECUTING:
-                self._send_cancel()
-            raise
-        finally:
-            self._end()
+        self._begin_auction()
+
+    def _abandon(self) -> None:
+        """Never leave a performer working, or one committed to us, behind."""
+        self._reject_pending()
+        if self.phase is _EXECUTING:
+            self._send_cancel()
+        self._end()
 
     def cancel(self) -> None:
         """Stop the action: CANCEL to the confirmed performer; ``run()`` returns cancelled."""
@@ -190,9 +205,8 @@ class ActionClient:
         if self.phase is _EXECUTING:
             self._send_cancel()
             self._finish(False, "cancelled", cancelled=True)
-        elif self.phase is _AUCTION:
+        elif self.phase is _AUCTION:  # NEW: the first step finds the request
             self._auction_step()
-        # NEW: run() finds the request when it starts
 
     # ------------------------------------------------------------------ auction
 
@@ -372,19 +386,12 @@ class ActionClient:
             lost_performers=tuple(self._lost),
         )
         self._end()
-        done = self._done
-        if done is not None and not done.done():
-            done.set_result(outcome)
+        self._resolve(outcome)
 
     def _fail(self, exc: Exception) -> None:
         """A callback raised: ``run()`` raises it, as when it was called there."""
-        self._reject_pending()
-        if self.phase is _EXECUTING:
-            self._send_cancel()
-        self._end()
-        done = self._done
-        if done is not None and not done.done():
-            done.set_exception(exc)
+        self._abandon()
+        self._reject(exc)
 
     def _end(self) -> None:
         self.phase = ClientPhase.DONE

@@ -2,20 +2,32 @@
 
 :class:`AuctionPolicy` is the mission file's ``auction:`` section (how often to
 re-send a REQUEST, when to give up, first responder or best bid, when a silent
-performer counts as lost); :class:`ActionOutcome` is how one auctioned action ended.
-The protocol itself is :class:`~plansys_bridge.hub.auction.ActionClient`.
+performer counts as lost); :class:`ActionOutcome` is how one auctioned action ended;
+:class:`ClientPhase` where the client is, and :data:`FeedbackCallback` what it calls
+with progress. The protocol itself is :class:`~plansys_bridge.hub.auction.ActionClient`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import enum
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.hub.settings import is_number, settings_from_mapping
 
-__all__ = ["ActionOutcome", "AuctionPolicy", "full_action_name"]
+__all__ = ["ActionOutcome", "AuctionPolicy", "ClientPhase", "FeedbackCallback", "full_action_name"]
+
+FeedbackCallback = Callable[[float, str], None]
+"""Called as ``feedback_cb(completion, status)`` for every FEEDBACK of the confirmed performer."""
+
+
+class ClientPhase(enum.Enum):
+    NEW = "new"
+    AUCTION = "auction"
+    EXECUTING = "executing"
+    DONE = "done"
 
 
 def full_action_name(action: str, arguments: Sequence[str]) -> str:

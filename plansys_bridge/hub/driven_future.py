@@ -1,0 +1,98 @@
+"""An operation that hub messages and timers drive to one outcome, kept as a future.
+
+Such an operation (an :class:`~plansys_bridge.hub.auction.ActionClient` following one
+action) does its work in the callbacks the hub and the loop call; a task awaiting its
+outcome would only add a task object, a step to start it, a wake-up when the outcome
+is set and a done-callback round per operation. :class:`DrivenFuture` hands out the
+outcome future itself and gives it what the task gave:
+
+* cancelling the future from outside stops the operation (``_abandon``), as
+  cancelling the task did (a done callback, taken off again when the operation
+  settles the future itself, so an ordinary end schedules no extra call);
+* the first step can be run now or in a loop callback scheduled now (where a task's
+  first step ran), and what it raises reaches whoever awaits the future.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Generic, TypeVar
+
+from plansys_bridge.errors import HubError
+
+__all__ = ["DrivenFuture"]
+
+T = TypeVar("T")
+
+
+class DrivenFuture(Generic[T]):
+    """Base class: ``_launch`` (the first step) and ``_abandon`` (stop, after a cancel
+    from outside or a failed first step) are the subclass's."""
+
+    _done: asyncio.Future[T] | None = None
+    _loop: asyncio.AbstractEventLoop
+    """The running loop, set when the future is made: only what runs after reads it."""
+
+    def _launch(self) -> None:  # pragma: no cover - every subclass implements it
+        raise NotImplementedError
+
+    def _abandon(self) -> None:  # pragma: no cover - every subclass implements it
+        raise NotImplementedError
+
+    def _open(self, name: str) -> asyncio.Future[T]:
+        """The outcome future, watched for a cancel from outside; ``name`` is the
+        method that asks, for the error when asked twice."""
+        if self._done is not None:
+            raise HubError(f"{self!r}: {name} may be called only once")
+        loop = self._loop = asyncio.get_running_loop()
+        done: asyncio.Future[T] = loop.create_future()
+        self._done = done
+        done.add_done_callback(self._on_done)
+        return done
+
+    def _begin(self, done: asyncio.Future[T]) -> Exception | None:
+        """Run the first step, unless the future was cancelled first (as a task
+        cancelled before its first step never ran). Returns what the step raised,
+        the operation then stopped and the future no longer watched."""
+        if done.done():
+            return None
+        try:
+            self._launch()
+        except BaseException as exc:
+            self._abandon()
+            if not isinstance(exc, Exception):
+                raise
+            self._settled()
+            return exc
+        return None
+
+    def _begin_soon(self, done: asyncio.Future[T]) -> None:
+        """:meth:`_begin` as a loop callback: an error goes to the future, where a
+        task would have held it."""
+        exc = self._begin(done)
+        if exc is not None:
+            done.set_exception(exc)
+
+    def _on_done(self, done: asyncio.Future[T]) -> None:
+        """The future ended without the operation settling it: cancelled from outside."""
+        if done.cancelled():
+            self._abandon()
+
+    def _settled(self) -> asyncio.Future[T] | None:
+        """The future if it is the operation's to settle now (still pending), no longer
+        watched for a cancel from outside; else None."""
+        done = self._done
+        if done is None or done.done():
+            return None
+        done.remove_done_callback(self._on_done)
+        return done
+
+    def _resolve(self, value: T) -> None:
+        done = self._settled()
+        if done is not None:
+            done.set_result(value)
+
+    def _reject(self, exc: BaseException) -> None:
+        done = self._settled()
+        if done is not None:
+            done.set_exception(exc)
