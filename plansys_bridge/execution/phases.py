@@ -199,7 +199,7 @@ def check_over_all_req(ctx: PlanContext, rt: ActionRuntime) -> Status:
 class ExecutePhase(Phase):
     """Hand the action to a performer through the auction and follow it.
 
-    ``initialise`` starts an :class:`ActionClient` (:meth:`ActionClient.start_soon`:
+    ``initialise`` starts an :class:`ActionClient` (``start(soon=True)``:
     its first REQUEST goes out where a task running it would have sent it, after
     the tick) and keeps the future of its outcome; the end of that future wakes the
     executor, so the next tick sees the outcome at once. Halting (over-all
@@ -214,7 +214,8 @@ class ExecutePhase(Phase):
     label = "ExecuteAction"
 
     def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
-        super().__init__(ctx, rt)
+        self.ctx = ctx  # Phase.__init__ inlined: one per executed action
+        self.rt = rt
         self.client: ActionClient | None = None
         self.task: asyncio.Future[ActionOutcome] | None = None
         """The outcome future (a future, not a task; the name is the executor's)."""
@@ -229,8 +230,8 @@ class ExecutePhase(Phase):
             policy=ctx.options.auction,
         )
         # partials, not lambdas: a callback is then one Python call, not two
-        future = self.task = client.start_soon(
-            partial(ctx.feedback, rt), confirm_cb=partial(ctx.confirmed, rt)
+        future = self.task = client.start(
+            partial(ctx.feedback, rt), confirm_cb=partial(ctx.confirmed, rt), soon=True
         )
         # tracked as PlanContext.track does, with one done callback instead of two:
         # the loop then schedules one call, not two, when the execution ends

@@ -36,6 +36,7 @@ from plansys_bridge.hub.auction_policy import (
     AuctionPolicy,
     ClientPhase,
     FeedbackCallback,
+    action_outcome,
     full_action_name,
 )
 from plansys_bridge.hub.driven_future import DrivenFuture
@@ -155,33 +156,24 @@ class ActionClient(DrivenFuture[ActionOutcome]):
         feedback_cb: FeedbackCallback | None = None,
         *,
         confirm_cb: Callable[[str], None] | None = None,
+        soon: bool = False,
     ) -> asyncio.Future[ActionOutcome]:
         """What :meth:`run` does, without a task (see :mod:`.driven_future`): send the
-        first REQUEST now and return the future of the outcome. Cancelling it stops
-        the action as cancelling run()'s task does: pending bidders get a REJECT, the
-        confirmed performer a CANCEL."""
+        first REQUEST and return the future of the outcome. Cancelling it stops the
+        action as cancelling run()'s task does: pending bidders get a REJECT, the
+        confirmed performer a CANCEL.
+
+        ``soon``: subscribe and send the first REQUEST in a loop callback scheduled
+        now, where a task made to await :meth:`run` took its first step. The executor
+        starts actions within a tick that may still halt them (``halt_on_failure``):
+        a halted action then sends nothing, and the hub sees the messages in the
+        order a task gave, for one loop callback instead of three."""
         done = self._open("start()")
         self._confirm_cb, self._feedback_cb = confirm_cb, feedback_cb
-        exc = self._begin(done)
-        if exc is not None:
+        if soon:
+            self._loop.call_soon(self._begin_soon, done)
+        elif (exc := self._begin(done)) is not None:
             raise exc
-        return done
-
-    def start_soon(
-        self,
-        feedback_cb: FeedbackCallback | None = None,
-        *,
-        confirm_cb: Callable[[str], None] | None = None,
-    ) -> asyncio.Future[ActionOutcome]:
-        """:meth:`start`, with the subscription and the first REQUEST made in a loop
-        callback scheduled now: where a task made to await :meth:`run` took its first
-        step. The executor starts actions from within a tick that may still halt them
-        (a failure with ``halt_on_failure``): a halted action then sends nothing, and
-        the hub sees the messages in the order a task gave, for one loop callback
-        instead of three."""
-        done = self._open("start_soon()")
-        self._confirm_cb, self._feedback_cb = confirm_cb, feedback_cb
-        self._loop.call_soon(self._begin_soon, done)
         return done
 
     def _launch(self) -> None:
@@ -274,13 +266,18 @@ class ActionClient(DrivenFuture[ActionOutcome]):
                 return
 
     def _confirm(self) -> None:
+        # _reject_pending, _auction_over and _arm's early return inlined: once per action
         winner = min(self._bids)[2]
         self._pending_bidders.remove(winner)
         self._send(ExecutionType.CONFIRM, winner)
         self.performer = winner
         self.phase = _EXECUTING
-        self._reject_pending()
-        self._auction_over()
+        if self._pending_bidders:
+            self._reject_pending()
+        unwatch = self._unwatch
+        if unwatch is not _nothing:
+            self._unwatch = _nothing
+            unwatch()
         if self._confirm_cb is not None:
             try:
                 self._confirm_cb(winner)
@@ -289,9 +286,11 @@ class ActionClient(DrivenFuture[ActionOutcome]):
                 return
         if self.phase is not _EXECUTING:
             return  # cancelled by the callback
-        self._last_seen = self._loop.time()
+        self._last_seen = now = self._loop.time()
         self.completion = 0.0
-        self._arm(self._last_seen + self.policy.liveness_timeout)
+        deadline = now + self.policy.liveness_timeout
+        if self._timer is None or self._timer_at > deadline:
+            self._arm(deadline)
 
     def _give_up(self) -> None:
         self._auction_over()
@@ -375,15 +374,15 @@ class ActionClient(DrivenFuture[ActionOutcome]):
     ) -> None:
         """The action is over: stop listening and hand ``run()`` its outcome."""
         self.status = status
-        outcome = ActionOutcome(
-            success=success,
-            status=status,
-            completion=self.completion,
-            performer=self.performer,
-            reauctioned=self._reauctioned,
-            cancelled=cancelled,
-            gave_up=gave_up,
-            lost_performers=tuple(self._lost),
+        outcome = action_outcome(
+            success,
+            status,
+            self.completion,
+            self.performer,
+            self._reauctioned,
+            cancelled,
+            gave_up,
+            tuple(self._lost),
         )
         self._end()
         self._resolve(outcome)

@@ -17,7 +17,14 @@ from typing import Any, Literal
 from plansys_bridge.errors import ConfigError
 from plansys_bridge.hub.settings import is_number, settings_from_mapping
 
-__all__ = ["ActionOutcome", "AuctionPolicy", "ClientPhase", "FeedbackCallback", "full_action_name"]
+__all__ = [
+    "ActionOutcome",
+    "AuctionPolicy",
+    "ClientPhase",
+    "FeedbackCallback",
+    "action_outcome",
+    "full_action_name",
+]
 
 FeedbackCallback = Callable[[float, str], None]
 """Called as ``feedback_cb(completion, status)`` for every FEEDBACK of the confirmed performer."""
@@ -97,3 +104,35 @@ class ActionOutcome:
     """Nobody answered the REQUEST within ``give_up_after``."""
     lost_performers: tuple[str, ...] = field(default_factory=tuple)
     """Performers declared lost (no feedback or heartbeat) during this action."""
+
+
+def action_outcome(
+    success: bool,
+    status: str,
+    completion: float,
+    performer: str,
+    reauctioned: int,
+    cancelled: bool,
+    gave_up: bool,
+    lost_performers: tuple[str, ...],
+) -> ActionOutcome:
+    """``ActionOutcome(...)`` for the client's end of every action: a frozen
+    dataclass's ``__init__`` sets each of the eight fields through
+    ``object.__setattr__``; an outcome made here is new and not yet shared, so its
+    fields are filled in at once (as :func:`~plansys_bridge.hub.messages.action_execution`
+    does for a message)."""
+    outcome = _new(ActionOutcome)
+    outcome.__dict__.update(
+        success=success,
+        status=status,
+        completion=completion,
+        performer=performer,
+        reauctioned=reauctioned,
+        cancelled=cancelled,
+        gave_up=gave_up,
+        lost_performers=lost_performers,
+    )
+    return outcome
+
+
+_new = object.__new__

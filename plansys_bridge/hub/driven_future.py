@@ -67,11 +67,19 @@ class DrivenFuture(Generic[T]):
         return None
 
     def _begin_soon(self, done: asyncio.Future[T]) -> None:
-        """:meth:`_begin` as a loop callback: an error goes to the future, where a
-        task would have held it."""
-        exc = self._begin(done)
-        if exc is not None:
+        """:meth:`_begin` as a loop callback (inlined: once per operation): an error
+        goes to the future, where a task would have held it."""
+        if done.done():
+            return
+        try:
+            self._launch()
+        except Exception as exc:
+            self._abandon()
+            self._settled()
             done.set_exception(exc)
+        except BaseException:
+            self._abandon()
+            raise
 
     def _on_done(self, done: asyncio.Future[T]) -> None:
         """The future ended without the operation settling it: cancelled from outside."""
@@ -88,8 +96,10 @@ class DrivenFuture(Generic[T]):
         return done
 
     def _resolve(self, value: T) -> None:
-        done = self._settled()
-        if done is not None:
+        """Settle the future with ``value`` (:meth:`_settled` inlined: once per operation)."""
+        done = self._done
+        if done is not None and not done.done():
+            done.remove_done_callback(self._on_done)
             done.set_result(value)
 
     def _reject(self, exc: BaseException) -> None:

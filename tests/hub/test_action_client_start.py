@@ -1,6 +1,6 @@
-"""ActionClient.start / start_soon: the outcome future without a task, against run().
+"""ActionClient.start: the outcome future without a task, against run().
 
-``run()`` in a task is the general path; ``start_soon()`` must send the same messages
+``run()`` in a task is the general path; ``start(soon=True)`` must send the same messages
 at the same instants and in the same order, and cancelling its future must do what
 cancelling run()'s task did (REJECTs to pending bidders, a CANCEL to the performer).
 """
@@ -17,7 +17,8 @@ from hypothesis import strategies as st
 
 from plansys_bridge.clock import VirtualClock, run
 from plansys_bridge.errors import HubError
-from plansys_bridge.hub.auction import ActionClient, AuctionPolicy, ClientPhase
+from plansys_bridge.hub.auction import ActionClient, ActionOutcome, AuctionPolicy, ClientPhase
+from plansys_bridge.hub.auction_policy import action_outcome
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.transport import InProcessTransport
 from plansys_bridge.performers.base import PerformerContext
@@ -59,7 +60,7 @@ def _drive(
     via: str, policy: AuctionPolicy, cancel_at: float | None, how: str, fail_on: str = ""
 ) -> Body:
     """A body that runs one client through ``via`` ("task": run() in a task, "soon":
-    start_soon(), "start": start()), stopping it at ``cancel_at`` by ``how``
+    start(soon=True), "start": start()), stopping it at ``cancel_at`` by ``how``
     ("future": cancelling the task or future, "client": ``client.cancel()``)."""
 
     async def body(hub: Hub) -> Any:
@@ -81,7 +82,7 @@ def _drive(
         if via == "task":
             waiter = asyncio.ensure_future(client.run(on_feedback, confirm_cb=on_confirm))
         elif via == "soon":
-            waiter = client.start_soon(on_feedback, confirm_cb=on_confirm)
+            waiter = client.start(on_feedback, confirm_cb=on_confirm, soon=True)
         else:
             waiter = client.start(on_feedback, confirm_cb=on_confirm)
         if cancel_at is not None:
@@ -194,7 +195,7 @@ def test_start_soon_sends_nothing_before_the_loop_runs_its_callback() -> None:
     async def body(hub: Hub) -> Any:
         rec = HubRecorder(hub)
         client = ActionClient(hub, "move", ["r1"], request_id="s")
-        future = client.start_soon()
+        future = client.start(soon=True)
         assert client.phase is ClientPhase.NEW and client.requests_sent == 0
         outcome = await future
         return outcome, rec.kinds()
@@ -210,7 +211,7 @@ def test_stopped_before_its_first_request_a_client_sends_nothing(how: str) -> No
     async def body(hub: Hub) -> Any:
         rec = HubRecorder(hub)
         client = ActionClient(hub, "move", ["r1"], request_id="n")
-        future = client.start_soon()
+        future = client.start(soon=True)
         if how == "future":
             future.cancel()
         else:
@@ -230,17 +231,17 @@ def test_stopped_before_its_first_request_a_client_sends_nothing(how: str) -> No
         assert ended.cancelled and not ended.success and ended.performer == ""
 
 
-@pytest.mark.parametrize("first", ["start", "start_soon", "run"])
+@pytest.mark.parametrize("first", ["start", "start soon", "run"])
 def test_a_client_starts_once(first: str) -> None:
     async def body(hub: Hub) -> Any:
         client = ActionClient(hub, "move", ["r1"], request_id="o")
         if first == "run":
             await client.run()
         else:
-            await getattr(client, first)()
-        for again in ("start", "start_soon"):
-            with pytest.raises(HubError, match=rf"{again}\(\) may be called only once"):
-                getattr(client, again)()
+            await client.start(soon=first == "start soon")
+        for soon in (False, True):
+            with pytest.raises(HubError, match=r"start\(\) may be called only once"):
+                client.start(soon=soon)
         with pytest.raises(HubError, match=r"run\(\) may be called only once"):
             await client.run()
 
@@ -253,7 +254,7 @@ def test_a_closed_transport_fails_start_at_once_and_start_soon_through_its_futur
     async def main() -> Any:
         await hub.start()
         clients = [ActionClient(hub, "move", ["r1"], request_id=str(i)) for i in range(3)]
-        soon = clients[0].start_soon()
+        soon = clients[0].start(soon=True)
         task = asyncio.ensure_future(clients[1].run())
         await hub.close()
         with pytest.raises(HubError, match="transport closed") as direct:
@@ -265,3 +266,32 @@ def test_a_closed_transport_fails_start_at_once_and_start_soon_through_its_futur
     assert isinstance(direct, HubError) and repr(errors[0]) == repr(errors[1])
     assert isinstance(errors[0], HubError) and "transport closed" in str(errors[0])
     assert phases == [ClientPhase.DONE] * 3
+
+
+@given(
+    success=st.booleans(),
+    status=st.text(max_size=20),
+    completion=st.floats(allow_nan=False),
+    performer=st.text(max_size=10),
+    reauctioned=st.integers(0, 5),
+    cancelled=st.booleans(),
+    gave_up=st.booleans(),
+    lost=st.lists(st.text(max_size=5), max_size=3).map(tuple),
+)
+def test_action_outcome_equals_the_dataclass_constructors_outcome(
+    success: bool,
+    status: str,
+    completion: float,
+    performer: str,
+    reauctioned: int,
+    cancelled: bool,
+    gave_up: bool,
+    lost: tuple[str, ...],
+) -> None:
+    args = (success, status, completion, performer, reauctioned, cancelled, gave_up, lost)
+    fast = action_outcome(*args)
+    general = ActionOutcome(*args)
+    assert fast == general and hash(fast) == hash(general) and repr(fast) == repr(general)
+    assert list(vars(fast)) == list(vars(general))  # same fields, same order
+    with pytest.raises(AttributeError):
+        fast.status = "changed"  # type: ignore[misc]  # still frozen
