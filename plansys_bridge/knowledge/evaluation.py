@@ -98,6 +98,9 @@ class Evaluator(Reasoner):
         self._actions: dict[str, AnyAction] = {a.name: a for a in domain.actions}
         self._kept: _Kept | None = None
         self._plain_facts: dict[int, tuple[Condition, tuple[tuple[str, Args], ...] | None]] = {}
+        self._plain_effects: dict[
+            int, tuple[Effect, tuple[tuple[Atom, ...], tuple[Atom, ...]] | None]
+        ] = {}
 
     # ================================================================= public API
 
@@ -117,12 +120,24 @@ class Evaluator(Reasoner):
         if bindings:
             b = normalize_bindings(bindings)
         else:
-            entry = self._plain_facts.get(id(cond))
-            if entry is None or entry[0] is not cond:
+            try:
+                entry = self._plain_facts[id(cond)]
+            except KeyError:
+                entry = self._plain(cond)
+            if entry[0] is not cond:
                 entry = self._plain(cond)
             facts = entry[1]
             if facts is not None:
-                return not facts or state.has_all(facts)
+                # State.has_all, inlined: the executor asks about seven conditions
+                # per action, and subscripts (no method call) find a predicate's set.
+                index = state._index
+                try:
+                    for predicate, args in facts:
+                        if args not in index[predicate]:
+                            return False
+                except KeyError:  # no fact of that predicate at all
+                    return False
+                return True
             b = {}
         return self._holds(cond, b, EvalContext(self, state, duration))
 
@@ -146,6 +161,31 @@ class Evaluator(Reasoner):
         if len(self._plain_facts) > CACHE_LIMIT:
             self._plain_facts.clear()
         self._plain_facts[id(cond)] = entry
+        return entry
+
+    def plain_changes(self, effect: Effect) -> tuple[tuple[Atom, ...], tuple[Atom, ...]] | None:
+        """(adds, deletes) of an effect that only adds and deletes ground atoms,
+        which are then the same in every state and with any duration; None for any
+        other effect. An unbound variable raises, as :meth:`changes` does."""
+        entry = self._plain_effects.get(id(effect))
+        if entry is None or entry[0] is not effect:
+            entry = self._plain_effect(effect)
+        return entry[1]
+
+    def _plain_effect(
+        self, effect: Effect
+    ) -> tuple[Effect, tuple[tuple[Atom, ...], tuple[Atom, ...]] | None]:
+        """``(effect, plain changes or None)``, remembered per effect object (an
+        effect that raises is not remembered, so it raises every time).
+
+        Why: the executor applies each ground action's two effects once and works
+        out the at-start one's delta first; the plan graph reads them too. Making
+        their atoms again each time is most of what applying them costs."""
+        found = _plain_changes(effect)
+        entry = (effect, None if found is None else (tuple(found[0]), tuple(found[1])))
+        if len(self._plain_effects) > CACHE_LIMIT:
+            self._plain_effects.clear()
+        self._plain_effects[id(effect)] = entry
         return entry
 
     def value(
@@ -186,8 +226,14 @@ class Evaluator(Reasoner):
         which gets it without working it out again: the executor works out what an
         at-start effect changes (to undo it if the action is halted) and then has
         the knowledge apply it. The kept answer is handed over once and dropped;
-        whoever keeps it must not change the lists it got.
+        whoever keeps it must not change the lists it got. An effect of ground
+        facts only needs no keeping: its changes are worked out once per effect
+        object (see :meth:`plain_changes`) and handed out as new lists each time.
         """
+        if not bindings:
+            plain = self.plain_changes(effect)
+            if plain is not None:  # the same answer in every state: nothing to keep
+                return list(plain[0]), list(plain[1]), {}
         b = normalize_bindings(bindings) if bindings else {}
         kept = self._kept
         if (
@@ -199,12 +245,6 @@ class Evaluator(Reasoner):
         ):
             self._kept = None
             return kept.adds, kept.deletes, kept.updates
-        plain = None if b else _plain_changes(effect)
-        if plain is not None:
-            adds, deletes = plain
-            if keep:
-                self._kept = _Kept(effect, state, b, duration, adds, deletes, {})
-            return adds, deletes, {}
         ctx = EvalContext(self, state, duration)
         gathered = Changes()
         self._collect(effect, b, ctx, gathered)

@@ -128,6 +128,60 @@ def test_changes_agree_with_the_general_walk(effect: Effect, state: State) -> No
     assert _outcome(lambda: ev.changes(effect, state)) == _outcome(general)
 
 
+@settings(max_examples=200, deadline=None)
+@given(effect=EFFECTS, states=st.lists(STATES, min_size=2, max_size=4))
+def test_an_effect_asked_again_agrees_with_the_general_walk(
+    effect: Effect, states: list[State]
+) -> None:
+    """One effect object asked about in several states (a remembered answer must
+    be right in each), its answers changed by the caller in between."""
+    ev = Evaluator(DOMAIN)
+    for state in states:
+
+        def general(state: State = state) -> tuple[list[Atom], list[Atom], dict[object, float]]:
+            gathered = Changes()
+            ev._collect(effect, {}, EvalContext(ev, state, None), gathered)
+            return gathered.adds, gathered.deletes, {}
+
+        got = _outcome(lambda state=state: ev.changes(effect, state))  # type: ignore[misc]
+        assert got == _outcome(general)
+        if got[0] == "value":
+            adds, deletes, _ = got[1]  # type: ignore[misc]
+            adds.append(Atom("p", ("z",)))  # a caller's own lists
+            deletes.clear()
+
+
+def test_facts_only_effects_are_worked_out_once_per_effect(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    ev = Evaluator(DOMAIN)
+    worked: list[Effect] = []
+    plain = evaluation._plain_changes
+
+    def counted(effect: Effect) -> Any:
+        worked.append(effect)
+        return plain(effect)
+
+    monkeypatch.setattr(evaluation, "_plain_changes", counted)
+    effect = AndEffect((AddEffect(Atom("p", ("a",))), DeleteEffect(Atom("q", ("a", "b")))))
+    equal = AndEffect((AddEffect(Atom("p", ("a",))), DeleteEffect(Atom("q", ("a", "b")))))
+    answers = [
+        ev.changes(effect, State([], {}, OBJECTS)),
+        ev.changes(effect, State([Atom("p", ("a",))], {}, OBJECTS), None, 3.0),
+        ev.changes(equal, State([], {}, OBJECTS)),
+    ]
+    assert worked == [effect, equal]  # by identity: an equal effect is worked out anew
+    assert all(a == ([Atom("p", ("a",))], [Atom("q", ("a", "b"))], {}) for a in answers)
+    assert answers[0][0] is not answers[1][0]
+    assert ev.plain_changes(effect) == ((Atom("p", ("a",)),), (Atom("q", ("a", "b")),))
+    assert ev.plain_changes(WhenEffect(Atom("p", ("a",)), AddEffect(Atom("p", ("b",))))) is None
+    unbound = AddEffect(Atom("p", ("?x",)))
+    for _ in range(2):  # an error is not remembered: it is raised every time
+        with pytest.raises(evaluation.UnboundVariableError, match=r"variable \?x is not bound"):
+            ev.changes(unbound, State([], {}, OBJECTS))
+    assert worked[3:] == [unbound, unbound]
+
+
 def test_facts_only_effects_skip_the_walk(monkeypatch: pytest.MonkeyPatch) -> None:
     """Guards the comparison above against a short way that is never taken."""
     ev = Evaluator(DOMAIN)
@@ -156,7 +210,9 @@ NUMERIC = AndEffect(
 )
 
 
-@pytest.mark.parametrize("effect", [NUMERIC, AndEffect((AddEffect(Atom("p", ("b",))),))])
+@pytest.mark.parametrize(
+    "effect", [NUMERIC, AndEffect((WhenEffect(Atom("p", ("a",)), AddEffect(Atom("p", ("b",)))),))]
+)
 def test_kept_changes_are_handed_over_once(effect: Effect, monkeypatch: pytest.MonkeyPatch) -> None:
     ev = Evaluator(DOMAIN)
     state = State([Atom("p", ("a",))], {("level", ("a",)): 1.0}, OBJECTS)
