@@ -81,6 +81,9 @@ class ChangeTracker:
         self._fluents: JournaledTable[FluentKey, float] = JournaledTable()
         self._goal: Condition | None = None
         self._state = State(objects=dict(constants))
+        self._published = self._state
+        """The state as the last finished change left it, read without the lock by
+        :meth:`ProblemExpert.state` while no change is under way (see there)."""
         self._subscribers: list[Callable[[KnowledgeChange], None]] = []
         self._depth = 0
         self.version = 0
@@ -171,7 +174,7 @@ class ChangeTracker:
         """
         state = self._state.with_facts(deletes, adds)  # touches nothing
         removed, added = self._facts.swap(deletes, adds, None)  # all or nothing
-        self._state = state
+        self._state = self._published = state
         if removed and added:  # deleted, then added again: there before and after
             again = removed.keys() & added.keys()
             if again:
@@ -255,10 +258,12 @@ class _Change:
                         tracker._undo(start)
                     finally:
                         if self._outer:
+                            tracker._published = tracker._state
                             tracker._depth = 0
                 return
             if not self._outer or start is None:
                 return
+            tracker._published = tracker._state  # before _depth: see ProblemExpert.state
             tracker._depth = 0
             try:
                 change = tracker._change_since(start, self._reason)

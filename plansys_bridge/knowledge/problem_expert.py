@@ -18,7 +18,7 @@ Why it is built this way:
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.hub.messages import Knowledge
@@ -51,6 +51,10 @@ __all__ = ["KnowledgeChange", "ProblemExpert"]
 
 _NAME = re.compile(r"^[a-z][a-z0-9_\-]*$")
 
+_APPLIED_LIMIT = 100_000
+"""Effects whose admitted facts :meth:`ProblemExpert.apply` remembers; past it, new
+ones are checked every time (until the objects change)."""
+
 
 class ProblemExpert(ChangeTracker):
     """The knowledge base of one domain (see module docs)."""
@@ -63,6 +67,11 @@ class ProblemExpert(ChangeTracker):
         self._constants = self.domain_expert.constants
         super().__init__(self._constants)
         self._admit = Admission(self.domain_expert, self._object_type)
+        self._applied: dict[int, tuple[Effect, list[Atom], list[Atom]]] = {}
+        """Effects of facts only applied before: (effect, admitted deletes, admitted
+        adds) by the effect's id, for as long as the objects do not change (the
+        instance table's write count is ``_applied_at``)."""
+        self._applied_at = -1
 
     # ================================================================ validation
 
@@ -378,9 +387,19 @@ class ProblemExpert(ChangeTracker):
     # ================================================================ evaluation
 
     def state(self) -> State:
-        """The current snapshot (immutable; cheap to keep)."""
-        with self._lock:
-            return self._state
+        """The current snapshot (immutable; cheap to keep).
+
+        While no change is under way this is the snapshot the last one left, read
+        without the lock: the executor asks about five times per action, and the
+        lock costs more than the read. While one is under way the lock is taken as
+        before: its own thread (re-entrant) sees it as it goes, any other waits for
+        it to end. ``_published`` is set before ``_depth`` drops to 0, so a reader
+        that finds no change under way gets a finished snapshot, never a half-made
+        one."""
+        if self._depth:
+            with self._lock:
+                return self._state
+        return self._published
 
     def evaluate(self, cond: Condition | str, bindings: Mapping[str, str] | None = None) -> bool:
         with self._lock:
@@ -398,15 +417,44 @@ class ProblemExpert(ChangeTracker):
         it found for the same effect and snapshot a moment ago (the executor works
         out an at-start effect's delta just before applying it). Everything is
         checked before anything changes; an effect of facts only, outside a
-        transaction, then takes the short way (:meth:`_replace_facts`)."""
+        transaction, then takes the short way (:meth:`_replace_facts`).
+
+        Such an effect (ground facts, no bindings) changes the same facts in every
+        state, so its admitted facts are remembered per effect object until the
+        objects change: a ground action's effects are applied once per step, and
+        plans repeat ground actions (a robot going round). Applying it again is then
+        one look-up before the short way."""
         with self._lock:
-            adds, deletes, updates = self.evaluator.changes(effect, self._state, bindings, duration)
             version = self._instances.writes
-            checked_adds = self._admit.facts(adds, version) if adds else adds
-            checked_deletes = self._admit.facts(deletes, version) if deletes else deletes
+            plain = None
+            if not bindings:
+                if version != self._applied_at:
+                    self._applied.clear()
+                    self._applied_at = version
+                try:
+                    known = self._applied[id(effect)]
+                except KeyError:
+                    pass
+                else:
+                    if known[0] is effect and not self._depth:
+                        self._replace_facts(known[1], known[2], "apply")
+                        return
+                plain = self.evaluator.plain_changes(effect)
+            adds: Sequence[Atom]
+            deletes: Sequence[Atom]
+            if plain is None:
+                adds, deletes, updates = self.evaluator.changes(
+                    effect, self._state, bindings, duration
+                )
+            else:
+                (adds, deletes), updates = plain, {}
+            checked_adds = self._admit.facts(adds, version) if adds else []
+            checked_deletes = self._admit.facts(deletes, version) if deletes else []
             for key in updates:
                 self._admit.fluent(*key)
             if not updates and not self._depth:
+                if plain is not None and len(self._applied) < _APPLIED_LIMIT:
+                    self._applied[id(effect)] = (effect, checked_deletes, checked_adds)
                 self._replace_facts(checked_deletes, checked_adds, "apply")
                 return
             with self._change("apply"):

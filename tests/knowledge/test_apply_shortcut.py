@@ -169,3 +169,82 @@ def test_a_notice_made_at_once_equals_one_made_field_by_field() -> None:
     assert made == KnowledgeChange(**fields) and repr(made) == repr(KnowledgeChange(**fields))
     with pytest.raises(dataclasses.FrozenInstanceError):
         made.version = 4  # type: ignore[misc]
+
+
+# ------------------------------------------------ effects remembered per object
+
+_POOL = [
+    AndEffect((DeleteEffect(Atom("p", ("a",))), AddEffect(Atom("p", ("c",))))),
+    AndEffect((DeleteEffect(Atom("p", ("c",))), AddEffect(Atom("q", ("c", "a"))))),
+    AndEffect((AddEffect(Atom("p", ("a",))), DeleteEffect(Atom("q", ("c", "a"))))),
+    AddEffect(Atom("q", ("b", "b"))),
+    DeleteEffect(Atom("q", ("b", "b"))),
+]
+"""Effect objects applied again and again (a plan's ground actions), some naming c."""
+
+_OPS = st.lists(
+    st.one_of(
+        st.tuples(st.just("apply"), st.integers(0, len(_POOL) - 1)),
+        st.tuples(st.sampled_from(["add", "remove"]), st.just(0)),
+    ),
+    max_size=12,
+)
+
+
+def _run(k: ProblemExpert, ops: list[tuple[str, int]], general: bool) -> list[str]:
+    """Apply ``ops`` (an effect of the pool, or c added or removed); the outcome of each."""
+    outcomes = []
+    for op, i in ops:
+        try:
+            if op == "add":
+                outcomes.append(str(k.add_instance("c", "thing")))
+            elif op == "remove":
+                outcomes.append(str(k.remove_instance("c")))
+            elif general:
+                with k.transaction():
+                    k.apply(_POOL[i])
+                outcomes.append("applied")
+            else:
+                k.apply(_POOL[i])
+                outcomes.append("applied")
+        except KnowledgeError as exc:
+            outcomes.append(str(exc))
+    return outcomes
+
+
+@settings(max_examples=150, deadline=None)
+@given(initial=st.lists(st.sampled_from(ATOMS), unique=True), ops=_OPS)
+def test_remembered_effects_leave_what_the_general_way_leaves(
+    initial: list[Atom], ops: list[tuple[str, int]]
+) -> None:
+    """The same effect objects applied again, with c coming and going in between
+    (so a remembered effect naming c must be checked again)."""
+    short, short_seen = _knowledge(initial)
+    general, general_seen = _knowledge(initial)
+    assert _run(short, ops, False) == _run(general, ops, True)
+    assert _observed(short, short_seen) == _observed(general, general_seen)
+
+
+def test_an_effect_applied_again_is_not_checked_again(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Guards the comparison above: the remembered way is taken, and left when the
+    objects change."""
+    k, seen = _knowledge([Atom("p", ("a",))])
+    checked: list[int] = []
+    facts = k._admit.facts
+
+    def counted(atoms: Any, version: int) -> list[Atom]:
+        checked.append(1)
+        return facts(atoms, version)
+
+    monkeypatch.setattr(k._admit, "facts", counted)
+    there, back = _POOL[0], _POOL[2]
+    k.apply(there)
+    first = len(checked)
+    k.apply(back)
+    k.apply(there)
+    assert len(checked) == 2 * first and k.get_predicates()[-1] == Atom("p", ("c",))
+    k.remove_instance("c")
+    with pytest.raises(KnowledgeError, match=r"predicate \(p c\): unknown object 'c'"):
+        k.apply(there)
+    assert len(checked) > 2 * first
+    assert [c.reason for c in seen] == ["apply", "apply", "apply", "remove_instance"]
