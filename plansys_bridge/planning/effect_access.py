@@ -54,6 +54,7 @@ __all__ = [
     "reads_fixed",
     "walk_effect",
     "writes_fixed",
+    "written_names",
 ]
 
 Parts = Iterator[tuple[Effect, Mapping[str, str]]]
@@ -156,6 +157,33 @@ def writes_fixed(effect: Effect) -> bool:
         value = effect.value  # type: ignore[union-attr]
         return all(type(n) in _EXPRESSIONS for n in iter_nodes(value))
     return kind is AddEffect or kind is DeleteEffect
+
+
+def written_names(effect: Effect) -> set[tuple[str, str]] | None:
+    """``("a", predicate)`` and ``("f", fluent name)`` of everything ``effect`` may
+    change, in any state; None when it holds a construct not known here (it may
+    then change anything).
+
+    Why: an over-all requirement on a variable no action changes (a map's
+    ``connected`` facts) can never be broken, so the plan graph builder need not
+    watch it while its action runs.
+    """
+    kind = type(effect)
+    if kind is AddEffect or kind is DeleteEffect:
+        return {("a", effect.atom.predicate)}  # type: ignore[union-attr]
+    if kind is NumericEffect:
+        return {("f", effect.fluent.name)}  # type: ignore[union-attr]
+    if kind is WhenEffect or kind is ForallEffect:
+        return written_names(effect.effect)  # type: ignore[union-attr]
+    if kind is AndEffect:
+        names: set[tuple[str, str]] = set()
+        for sub in effect.effects:  # type: ignore[union-attr]
+            found = written_names(sub)
+            if found is None:
+                return None
+            names |= found
+        return names
+    return None
 
 
 def condition_vars(

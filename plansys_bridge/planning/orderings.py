@@ -25,6 +25,7 @@ __all__ = [
     "Point",
     "UnexplainedRequirement",
     "When",
+    "reason_text",
 ]
 
 GROUND: Mapping[str, str] = MappingProxyType({})
@@ -88,5 +89,17 @@ class Ordering:
 
     @property
     def reason(self) -> str:
-        verb = {"causal": "needs", "threat": "must not break", "effects": "conflicting effects on"}
-        return f"{self.source_point}->{self.target_point} {verb[self.kind]} {self.subject}"
+        return reason_text(self.source_point, self.target_point, self.kind, self.subject)
+
+
+_VERBS: Mapping[Kind, str] = {
+    "causal": "needs",
+    "threat": "must not break",
+    "effects": "conflicting effects on",
+}
+
+
+def reason_text(source_point: Point, target_point: Point, kind: Kind, subject: str) -> str:
+    """``start->end needs (robot_at r1 kitchen)``: an ordering's reason, also written
+    by the DOT view's edges without making the :class:`Ordering`."""
+    return f"{source_point}->{target_point} {_VERBS[kind]} {subject}"

@@ -22,55 +22,44 @@ it reads. Every edge points forward in plan order, so the graph is always acycli
 The simulation also evaluates every condition exactly (with the knowledge
 :class:`~plansys_bridge.knowledge.evaluation.Evaluator`), so :meth:`PlanGraph.check`
 can name the action and the requirement a plan does not explain. Finally a
-transitive reduction keeps only the edges a reader needs.
+transitive reduction keeps only the edges a reader needs. The simulation itself is
+:mod:`plansys_bridge.planning.graph_builder`.
 """
 
 from __future__ import annotations
 
 import gc
-from collections.abc import Collection, Iterable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from functools import cached_property
-from typing import TypeAlias
+from typing import TypeVar
 
 import networkx as nx
 
-from plansys_bridge.errors import ExecutionError
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
 from plansys_bridge.knowledge.state import State
-from plansys_bridge.pddl.model import (
-    Atom,
-    Condition,
-    Domain,
-    Effect,
-)
-from plansys_bridge.planning.effect_access import (
-    EffectAccess,
-    Var,
-    condition_vars,
-    effect_access,
-    reads_fixed,
-    writes_fixed,
-)
-from plansys_bridge.planning.happening_order import (
-    happening_order,
-    transitive_reduction,
-)
+from plansys_bridge.pddl.model import Atom, Domain
+from plansys_bridge.planning.graph_builder import GraphBuilder
+from plansys_bridge.planning.happening_order import happening_order, transitive_reduction
 from plansys_bridge.planning.orderings import (
     END,
     GROUND,
     START,
-    Kind,
     Ordering,
     PlanGraphError,
     Point,
     UnexplainedRequirement,
-    When,
 )
 from plansys_bridge.planning.plan import Plan, PlanStep
 from plansys_bridge.planning.requirement_text import condition_text, describe_unmet
-from plansys_bridge.planning.step_edges import StepEdges, networkx_graph, orderings_of
-from plansys_bridge.planning.var_history import Access, VarHistory, subject_text
+from plansys_bridge.planning.step_edges import (
+    Links,
+    StepEdges,
+    group_orderings,
+    networkx_graph,
+    sorted_pairs,
+    waits_of,
+)
+from plansys_bridge.planning.var_history import VarHistory, subject_text
 
 __all__ = [
     "END",
@@ -86,36 +75,72 @@ __all__ = [
     "describe_unmet",
 ]
 
-_Var: TypeAlias = Var
-
 
 # ---------------------------------------------------------------- the result
 
 
-@dataclass
 class PlanGraph:
     """The plan's dependency graph.
 
-    ``graph`` (networkx ``DiGraph``) has one node per plan step index (attributes
-    ``action`` text, ``time``, ``duration``) and an edge ``i -> j`` when some
-    happening of ``j`` must wait for some happening of ``i``; edge attributes:
-    ``reason`` (readable text), ``orderings`` (list of :class:`Ordering`) and
-    ``points`` (set of ``(source_point, target_point)`` pairs). Edges are
-    transitively reduced at the level of happenings. It is made on first use: the
-    executor needs only the orderings, and making a networkx graph of a
-    1,000-action plan cost as much as finding its orderings.
+    :attr:`orderings` are the reduced orderings between happenings (what the
+    executor waits for, see :meth:`waits`). ``graph`` (networkx ``DiGraph``) has
+    one node per plan step index (attributes ``action`` text, ``time``,
+    ``duration``) and an edge ``i -> j`` when some happening of ``j`` must wait for
+    some happening of ``i``; edge attributes: ``reason`` (readable text),
+    ``orderings`` (list of :class:`Ordering`) and ``points`` (set of
+    ``(source_point, target_point)`` pairs). Edges are transitively reduced at the
+    level of happenings.
+
+    Made by :func:`build_plan_graph`, the orderings, the networkx graph and the
+    edge texts are made on first use: the executor needs only the waits, and for
+    a 1,000-action plan making the rest cost as much as finding the orderings.
+    Made with ``orderings`` given, everything is read from them.
     """
 
-    plan: Plan
-    steps: tuple[PlanStep, ...]
-    ground: tuple[GroundAction, ...]
-    orderings: tuple[Ordering, ...]
-    """The reduced orderings (what the executor waits for)."""
-    unexplained: tuple[UnexplainedRequirement, ...] = ()
-    achievers: Mapping[Atom, int] = field(default_factory=dict)
-    """For every atom true at the end of the plan, the step whose effect last set it."""
-    final_state: State | None = None
-    """The state the plan leads to, simulated from the knowledge it was built on."""
+    def __init__(
+        self,
+        plan: Plan,
+        steps: tuple[PlanStep, ...],
+        ground: tuple[GroundAction, ...],
+        orderings: Iterable[Ordering] | None = None,
+        unexplained: tuple[UnexplainedRequirement, ...] = (),
+        achievers: Mapping[Atom, int] | None = None,
+        final_state: State | None = None,
+        *,
+        links: Links[VarHistory] | None = None,
+        order: Sequence[int] | None = None,
+    ) -> None:
+        self.plan = plan
+        self.steps = steps
+        self.ground = ground
+        self.unexplained = unexplained
+        self.achievers: Mapping[Atom, int] = achievers if achievers is not None else {}
+        """For every atom true at the end of the plan, the step whose effect last set it."""
+        self.final_state = final_state
+        """The state the plan leads to, simulated from the knowledge it was built on."""
+        self._links = links if orderings is None else None
+        if self._links is None:
+            self.__dict__["orderings"] = tuple(orderings or ())
+            pairs = [
+                (2 * o.source + (o.source_point == END), 2 * o.target + (o.target_point == END))
+                for o in self.orderings
+            ]
+        else:
+            pairs = list(self._links.pairs)
+        self._start_waits, self._end_waits = waits_of(pairs, len(steps))
+        self._order = (
+            list(order)
+            if order is not None
+            else list(dict.fromkeys([h >> 1 for h in happening_order(steps)]))
+        )
+        """The steps in the order of their first happening."""
+
+    @cached_property
+    def orderings(self) -> tuple[Ordering, ...]:
+        """The reduced orderings, sorted by the plan position of their target, then
+        of their source."""
+        assert self._links is not None  # set in __init__ otherwise
+        return _acyclic(self._links.orderings)
 
     def check(self) -> None:
         """Raise :class:`PlanGraphError` (an ``ExecutionError``) naming each action and
@@ -127,19 +152,29 @@ class PlanGraph:
         return len(self.steps)
 
     @cached_property
+    def _step_edges(self) -> StepEdges:
+        return group_orderings(self.orderings)
+
+    @cached_property
     def graph(self) -> nx.DiGraph:
         return networkx_graph(self.steps, self._step_edges)
 
     def edge_reasons(self) -> Iterator[tuple[int, int, str]]:
         """``(source, target, reason)`` of every edge of :attr:`graph` in sorted order,
-        without making the networkx graph (the DOT view needs only these)."""
-        for (source, target), (os, _points) in sorted(self._step_edges.items()):
-            yield source, target, "; ".join(o.reason for o in os)
+        without making the networkx graph or the orderings (the DOT view needs only
+        these)."""
+        if self._links is not None and "orderings" not in self.__dict__:
+            return iter(_acyclic(self._links.edge_reasons))
+        return iter(
+            [
+                (source, target, "; ".join(o.reason for o in os))
+                for (source, target), (os, _points) in sorted(self._step_edges.items())
+            ]
+        )
 
     def waits(self, step: int, point: Point) -> tuple[tuple[int, Point], ...]:
         """The happenings of other steps that ``step``'s ``point`` must wait for."""
-        table = self._start_waits if point == START else self._end_waits
-        return table[step]
+        return self._start_waits[step] if point == START else self._end_waits[step]
 
     def predecessors(self, step: int) -> list[int]:
         return list(self.graph.predecessors(step))
@@ -179,12 +214,6 @@ class PlanGraph:
                 start[j] = max(start[j], need)
         return start
 
-    # filled by the builder
-    _start_waits: list[tuple[tuple[int, Point], ...]] = field(default_factory=list, repr=False)
-    _end_waits: list[tuple[tuple[int, Point], ...]] = field(default_factory=list, repr=False)
-    _order: list[int] = field(default_factory=list, repr=False)
-    _step_edges: StepEdges = field(default_factory=dict, repr=False)
-
 
 # ---------------------------------------------------------------- building
 
@@ -205,291 +234,40 @@ def build_plan_graph(
     ``PlanGraph.unexplained`` and :meth:`PlanGraph.check` raises them.
     """
     ev = evaluator if evaluator is not None else Evaluator(domain)
-    # The build makes many small objects and frees none of them until it ends, and
-    # none of them form cycles: the cyclic collector would only walk them again and
-    # again (and the whole heap, in an executor that holds a large knowledge base).
+    return _acyclic(lambda: _build(plan, domain, state, ev, reduce))
+
+
+_T = TypeVar("_T")
+
+
+def _acyclic(make: Callable[[], _T]) -> _T:
+    """``make()`` with the cyclic collector paused. Why: building the graph (and
+    its texts) makes many small objects and frees none of them until it ends, and
+    none of them form cycles: the collector would only walk them again and again
+    (and the whole heap, in an executor that holds a large knowledge base)."""
     collecting = gc.isenabled()
     gc.disable()
     try:
-        return _Builder(plan, domain, state, ev).build(reduce=reduce)
+        return make()
     finally:
         if collecting:
             gc.enable()
 
 
-class _Builder:
-    def __init__(self, plan: Plan, domain: Domain, state: State, ev: Evaluator) -> None:
-        self.plan = plan
-        self.domain = domain
-        self.initial = state
-        self.ev = ev
-        self.steps = tuple(plan.steps)
-        self.edges: dict[tuple[int, int], tuple[Kind, VarHistory]] = {}
-        self.vars: dict[_Var, VarHistory] = {}
-        self.unexplained: list[UnexplainedRequirement] = []
-        self.achievers: dict[Atom, int] = {}
-        # What a ground condition reads / an effect touches, by id, for those whose
-        # answer is the same in every state (see effect_access.reads_fixed); the
-        # ground actions are shared between repeated steps and outlive the build.
-        self._fixed_reads: dict[int, tuple[VarHistory, ...] | None] = {}
-        self._fixed_effects: dict[int, Access | None] = {}
-
-    # happenings are ints: 2*step (start), 2*step+1 (end)
-
-    def _ground(self) -> tuple[GroundAction, ...]:
-        out: list[GroundAction] = []
-        actions = {a.name: a for a in self.domain.actions}
-        # plans repeat actions (a robot going back and forth): ground each once, all
-        # in the same initial state, and share the (frozen) result
-        seen: dict[tuple[str, tuple[str, ...]], GroundAction] = {}
-        for i, step in enumerate(self.steps):
-            key = (step.action, tuple(step.arguments))
-            known = seen.get(key)
-            if known is not None:
-                out.append(known)
-                continue
-            action = actions.get(step.action)
-            if action is None:
-                raise ExecutionError(
-                    f"plan step {i} {step.text}: domain {self.domain.name!r} "
-                    f"has no action {step.action!r}"
-                )
-            if len(action.parameters) != len(step.arguments):
-                raise ExecutionError(
-                    f"plan step {i} {step.text}: action {step.action!r} takes "
-                    f"{len(action.parameters)} arguments, got {len(step.arguments)}"
-                )
-            try:
-                ground = seen[key] = self.ev.ground_action(action, step.arguments, self.initial)
-                out.append(ground)
-            except Exception as exc:  # the evaluator's own error names the cause
-                raise ExecutionError(f"plan step {i} {step.text}: {exc}") from exc
-        return tuple(out)
-
-    def build(self, *, reduce: bool) -> PlanGraph:
-        ground = self._ground()
-        order = happening_order(self.steps)
-        self.pos = {h: p for p, h in enumerate(order)}
-        state = self.initial
-        open_over_all: dict[int, Collection[VarHistory]] = {}
-        watchers: dict[VarHistory, set[int]] = {}
-        for h in order:
-            i, is_end = divmod(h, 2)
-            g = ground[i]
-            dur = self.steps[i].duration
-            point_cond = g.at_end if is_end else g.at_start
-            when: When = "at end" if is_end else "at start"
-            for var in self._ground_vars(point_cond, state):
-                self._read(var, h, h)
-            if not self.ev.holds(point_cond, state, GROUND, dur):
-                self._unexplained(i, when, point_cond, g, state)
-            if is_end:
-                # the over-all interval closes before the end effects
-                # (no empty set made and dropped per happening: a watched
-                # variable keeps its entry in ``watchers`` once it has one)
-                for var in open_over_all.pop(i, ()):
-                    watchers[var].discard(i)
-            effect = g.end_effect if is_end else g.start_effect
-            access, written = self._effect(effect, h, state)
-            if access.plain:  # same adds and deletes in every state: no need to walk
-                # (with_changes deletes first, so every atom added is then true)
-                state = state.with_changes(adds=access.adds, deletes=access.deleted)
-                for atom in access.adds:
-                    self.achievers[atom] = i
-            else:
-                state = self.ev.apply(effect, state, GROUND, dur)
-                for atom in access.adds:
-                    if atom in state:
-                        self.achievers[atom] = i
-            if not is_end:
-                ovars = self._ground_vars(g.over_all, state)
-                for var in ovars:
-                    self._read(var, h, h + 1)
-                if not self.ev.holds(g.over_all, state, GROUND, dur):
-                    self._unexplained(i, "over all", g.over_all, g, state)
-                else:
-                    open_over_all[i] = ovars
-                    for var in ovars:
-                        watching = watchers.get(var)
-                        if watching is None:
-                            watchers[var] = {i}
-                        else:
-                            watching.add(i)
-            # re-check the over-all conditions this happening may have broken
-            for var in written:
-                for j in tuple(watchers.get(var, ())):
-                    if j == i:
-                        continue
-                    gj = ground[j]
-                    if not self.ev.holds(gj.over_all, state, GROUND, self.steps[j].duration):
-                        self._unexplained(
-                            j,
-                            "over all",
-                            gj.over_all,
-                            gj,
-                            state,
-                            detail=f"is broken by step {i} {self.steps[i].text} while it runs",
-                        )
-                        for v in open_over_all.pop(j, ()):
-                            watchers[v].discard(j)
-        return self._result(ground, order, state, reduce=reduce)
-
-    # ------------------------------------------------------------ accesses
-
-    def _ground_vars(self, cond: Condition, state: State) -> Collection[VarHistory]:
-        """The histories of ``_condition_vars`` of a ground condition, kept (in the
-        order it was found) when it is the same in every state."""
-        key = id(cond)
-        if key not in self._fixed_reads:
-            fixed = reads_fixed(cond, self.ev._derived_rules)
-            self._fixed_reads[key] = (
-                tuple(map(self._history, self._condition_vars(cond, GROUND, state)))
-                if fixed
-                else None
-            )
-        found = self._fixed_reads[key]
-        if found is not None:
-            return found
-        return [self._history(v) for v in self._condition_vars(cond, GROUND, state)]
-
-    def _condition_vars(
-        self, cond: Condition, bindings: Mapping[str, str], state: State
-    ) -> set[_Var]:
-        return condition_vars(self.ev, cond, bindings, state)
-
-    def _effect(
-        self, effect: Effect, h: int, state: State
-    ) -> tuple[EffectAccess, tuple[VarHistory, ...]]:
-        """Record the effect's accesses; returns them and the histories written."""
-        key = id(effect)
-        if key not in self._fixed_effects:
-            fixed = writes_fixed(effect)
-            self._fixed_effects[key] = (
-                self._resolve(effect_access(self.ev, effect, state, fixed)) if fixed else None
-            )
-        found = self._fixed_effects[key]
-        if found is None:
-            found = self._resolve(effect_access(self.ev, effect, state))
-        access, read, writes, written = found
-        for hist in read:
-            self._read(hist, h, h)
-        for hist, kind in writes:
-            self._write(hist, h, kind)
-        return access, written
-
-    def _resolve(self, access: EffectAccess) -> Access:
-        """``access`` with its variables' histories (the written ones in the order
-        of ``access.written``)."""
-        history = self._history
-        return (
-            access,
-            tuple(map(history, access.read)),
-            tuple((history(var), kind) for var, kind in access.writes),
-            tuple(map(history, access.written)),
-        )
-
-    def _history(self, var: _Var) -> VarHistory:
-        hist = self.vars.get(var)
-        if hist is None:
-            if var[0] == "a":
-                atom = var[1]
-                assert isinstance(atom, Atom)
-                hist = VarHistory(var, True, "add" if atom in self.initial else "del")
-            else:
-                hist = VarHistory(var, False, "read")
-            self.vars[var] = hist
-        return hist
-
-    def _read(self, hist: VarHistory, head: int, tail: int) -> None:
-        if hist.is_atom:
-            # an atom's reads see the value of the current run; link from its latest writer
-            if hist.latest_effect is not None:
-                self._edge(hist.latest_effect, head, "causal", hist)
-            hist.current.append((tail, None))
-            return
-        if hist.kind == "read":
-            for src, _ in hist.previous:
-                self._edge(src, head, "causal", hist)
-            hist.current.append((tail, None))
-            return
-        hist.previous = hist.current
-        hist.current = [(tail, None)]
-        hist.kind = "read"
-        for src, _ in hist.previous:
-            self._edge(src, head, "causal", hist)
-
-    def _write(self, hist: VarHistory, h: int, kind: str) -> None:
-        if hist.kind == kind and kind != "assign":
-            members = hist.previous
-        else:
-            hist.previous = hist.current
-            hist.current = []
-            hist.kind = kind
-            members = hist.previous
-        if members:  # _edge inlined: a write may follow many readers
-            pos, edges, mine, step = self.pos, self.edges, self.pos[h], h // 2
-            for src, role in members:
-                if src // 2 == step or pos[src] >= mine:
-                    continue
-                if (src, h) not in edges:  # a causal or earlier reason stays
-                    edges[(src, h)] = ("effects" if role == "effects" else "threat", hist)
-        hist.current.append((h, "effects"))
-        hist.latest_effect = h
-
-    def _edge(self, src: int, dst: int, kind: Kind, hist: VarHistory) -> None:
-        if src // 2 == dst // 2:
-            return
-        if self.pos[src] >= self.pos[dst]:
-            # never order against the plan (an over-all read that ends after this
-            # happening: either the plan is wrong, which check() reports, or the
-            # atom was read by a branch of the condition that does not matter)
-            return
-        key = (src, dst)
-        found = self.edges.get(key)
-        if found is None or (kind == "causal" and found[0] != "causal"):
-            self.edges[key] = (kind, hist)
-
-    def _unexplained(
-        self,
-        i: int,
-        when: When,
-        cond: Condition,
-        g: GroundAction,
-        state: State,
-        detail: str = "",
-    ) -> None:
-        text = describe_unmet(self.ev, cond, state, GROUND, self.steps[i].duration)
-        self.unexplained.append(UnexplainedRequirement(i, self.steps[i].text, when, text, detail))
-
-    # ------------------------------------------------------------ result
-
-    def _result(
-        self, ground: tuple[GroundAction, ...], order: list[int], state: State, *, reduce: bool
-    ) -> PlanGraph:
-        n = len(self.steps)
-        succ: dict[int, list[int]] = {}
-        for src, dst in self.edges:
-            succ.setdefault(src, []).append(dst)
-        kept = transitive_reduction(order, succ, self.pos) if reduce else set(self.edges)
-        orderings, start_waits, end_waits, steps = orderings_of(
-            kept, self.edges, self.pos, n, subject_text
-        )
-        step_order: list[int] = []
-        seen: set[int] = set()
-        for h in order:
-            if h // 2 not in seen:
-                seen.add(h // 2)
-                step_order.append(h // 2)
-        return PlanGraph(
-            plan=self.plan,
-            steps=self.steps,
-            ground=ground,
-            orderings=tuple(orderings),
-            unexplained=tuple(self.unexplained),
-            achievers=self.achievers,
-            final_state=state,
-            _start_waits=start_waits,
-            _end_waits=end_waits,
-            _order=step_order,
-            _step_edges=steps,
-        )
+def _build(plan: Plan, domain: Domain, state: State, ev: Evaluator, reduce: bool) -> PlanGraph:
+    builder = GraphBuilder(plan.steps, domain, state, ev)
+    ground, moves = builder.ground()
+    order = happening_order(builder.steps)
+    final = builder.simulate(ground, moves, order)
+    kept = transitive_reduction(order, builder.succ, builder.pos) if reduce else builder.edges
+    achievers = {hist.var[1]: i for hist, i in builder.achieved.items()}
+    return PlanGraph(
+        plan=plan,
+        steps=builder.steps,
+        ground=ground,
+        unexplained=tuple(builder.unexplained),
+        achievers=achievers,  # type: ignore[arg-type]
+        final_state=final,
+        links=Links(sorted_pairs(kept, order, builder.pos), builder.edges, subject_text),
+        order=list(dict.fromkeys([h >> 1 for h in order])),
+    )

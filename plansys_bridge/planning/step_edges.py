@@ -1,23 +1,33 @@
-"""The orderings kept between happenings, grouped by the steps they join.
+"""The orderings kept between happenings, and the views made of them on demand.
 
-The builder (:mod:`plansys_bridge.planning.plan_graph`) finds orderings between
+The builder (:mod:`plansys_bridge.planning.graph_builder`) finds orderings between
 happenings; the executor waits on them per happening, while a reader (the DOT view,
-the report, tests) sees one edge per pair of steps. Both are made here in one pass
-over the kept orderings, and the networkx graph only when someone asks for it:
-making it for a 1,000-action plan cost as much as finding the orderings.
+the report, tests) sees one edge per pair of steps. The executor's waits are made
+at once; the :class:`Ordering` objects, their texts, the step-level edges and the
+networkx graph only when someone asks for them: for a 1,000-action plan making
+them cost as much as finding the orderings, and an executor that publishes no
+graph never reads them.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection, Mapping, Sequence
-from typing import TypeAlias, TypeVar
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from typing import Generic, TypeAlias, TypeVar
 
 import networkx as nx
 
-from plansys_bridge.planning.orderings import END, START, Kind, Ordering, Point
+from plansys_bridge.planning.orderings import END, START, Kind, Ordering, Point, reason_text
 from plansys_bridge.planning.plan import PlanStep
 
-__all__ = ["StepEdges", "Waits", "networkx_graph", "orderings_of"]
+__all__ = [
+    "Links",
+    "StepEdges",
+    "Waits",
+    "group_orderings",
+    "networkx_graph",
+    "sorted_pairs",
+    "waits_of",
+]
 
 StepEdges: TypeAlias = dict[tuple[int, int], tuple[list[Ordering], set[tuple[Point, Point]]]]
 """(source step, target step) -> (its orderings in plan order, their point pairs)."""
@@ -31,37 +41,87 @@ _POINTS: tuple[Point, Point] = (START, END)
 """A happening's point by its parity (happening ``2*i`` is step ``i``'s start)."""
 
 
-def orderings_of(
-    kept: Collection[tuple[int, int]],
-    edges: Mapping[tuple[int, int], tuple[Kind, _Subject]],
-    pos: Mapping[int, int],
-    n: int,
-    describe: Callable[[_Subject], str],
-) -> tuple[list[Ordering], Waits, Waits, StepEdges]:
-    """The orderings of the ``kept`` happening pairs, sorted by the plan position of
-    their target then source, with each step's start and end waits and the edges
-    between steps. ``edges`` gives each pair's kind and subject (written as text by
-    ``describe``, for the kept pairs only), ``pos`` each happening's plan position,
-    ``n`` the number of steps."""
-    orderings: list[Ordering] = []
+def sorted_pairs(
+    kept: Iterable[tuple[int, int]], order: Sequence[int], pos: Sequence[int]
+) -> list[tuple[int, int]]:
+    """The ``kept`` happening pairs sorted by the plan position of their target,
+    then of their source (``order`` lists the happenings by position, ``pos`` gives
+    each one's): one integer sort key per pair, no key function."""
+    width = len(order)
+    keys = sorted([pos[dst] * width + pos[src] for src, dst in kept])
+    return [(order[k % width], order[k // width]) for k in keys]
+
+
+def waits_of(pairs: Iterable[tuple[int, int]], n: int) -> tuple[Waits, Waits]:
+    """Each of the ``n`` steps' start and end waits, in the order of ``pairs``."""
     start_waits: list[list[tuple[int, Point]]] = [[] for _ in range(n)]
     end_waits: list[list[tuple[int, Point]]] = [[] for _ in range(n)]
+    for src, dst in pairs:
+        (end_waits if dst & 1 else start_waits)[dst >> 1].append((src >> 1, _POINTS[src & 1]))
+    return [tuple(w) for w in start_waits], [tuple(w) for w in end_waits]
+
+
+class Links(Generic[_Subject]):
+    """The builder's kept happening pairs in ordering order, each with its kind and
+    subject in ``edges``; ``describe`` writes a subject as the orderings do."""
+
+    def __init__(
+        self,
+        pairs: Sequence[tuple[int, int]],
+        edges: Mapping[tuple[int, int], tuple[Kind, _Subject]],
+        describe: Callable[[_Subject], str],
+    ) -> None:
+        self.pairs = pairs
+        self.edges = edges
+        self.describe = describe
+
+    def orderings(self) -> tuple[Ordering, ...]:
+        edges, describe = self.edges, self.describe
+        out: list[Ordering] = []
+        for src, dst in self.pairs:
+            kind, subject = edges[(src, dst)]
+            out.append(
+                Ordering(
+                    src >> 1, _POINTS[src & 1], dst >> 1, _POINTS[dst & 1], kind, describe(subject)
+                )
+            )
+        return tuple(out)
+
+    def edge_reasons(self) -> list[tuple[int, int, str]]:
+        """``(source, target, reason)`` per pair of steps, sorted, as
+        :func:`group_orderings` and the orderings' reasons would give them; each
+        distinct reason is written once."""
+        edges, describe = self.edges, self.describe
+        written: dict[tuple[int, int, Kind, _Subject], str] = {}
+        groups: dict[tuple[int, int], list[str]] = {}
+        for src, dst in self.pairs:
+            kind, subject = edges[(src, dst)]
+            key = (src & 1, dst & 1, kind, subject)
+            if key in written:
+                reason = written[key]
+            else:
+                reason = written[key] = reason_text(
+                    _POINTS[src & 1], _POINTS[dst & 1], kind, describe(subject)
+                )
+            pair = (src >> 1, dst >> 1)
+            if pair in groups:
+                groups[pair].append(reason)
+            else:
+                groups[pair] = [reason]
+        return [(s, t, "; ".join(reasons)) for (s, t), reasons in sorted(groups.items())]
+
+
+def group_orderings(orderings: Iterable[Ordering]) -> StepEdges:
+    """The orderings grouped by the pair of steps they join, in their order."""
     steps: StepEdges = {}
-    width = len(pos) + 1  # one integer sort key instead of a key function per pair
-    for _, src, dst in sorted([(pos[dst] * width + pos[src], src, dst) for src, dst in kept]):
-        kind, subject = edges[(src, dst)]
-        source, target = src // 2, dst // 2
-        source_point, target_point = _POINTS[src % 2], _POINTS[dst % 2]
-        o = Ordering(source, source_point, target, target_point, kind, describe(subject))
-        orderings.append(o)
-        (end_waits if dst % 2 else start_waits)[target].append((source, source_point))
-        found = steps.get((source, target))
+    for o in orderings:
+        found = steps.get((o.source, o.target))
         if found is None:
-            steps[(source, target)] = ([o], {(source_point, target_point)})
+            steps[(o.source, o.target)] = ([o], {(o.source_point, o.target_point)})
         else:
             found[0].append(o)
-            found[1].add((source_point, target_point))
-    return orderings, [tuple(w) for w in start_waits], [tuple(w) for w in end_waits], steps
+            found[1].add((o.source_point, o.target_point))
+    return steps
 
 
 def networkx_graph(steps: Sequence[PlanStep], edges: StepEdges) -> nx.DiGraph:

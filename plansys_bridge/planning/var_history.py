@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from typing import TypeAlias
 
 from plansys_bridge.knowledge.state import FluentKey
+from plansys_bridge.pddl.model import Atom
 from plansys_bridge.planning.effect_access import EffectAccess, Var
 from plansys_bridge.planning.orderings import Kind
 
@@ -34,6 +35,11 @@ class VarHistory:
     """(tail happening, access role) of the current run's members."""
     previous: list[tuple[int, Kind | None]] = field(default_factory=list)
     latest_effect: int | None = None
+    changeable: bool = True
+    """Whether some action of the plan may change the variable (the builder watches
+    only such variables for over-all requirements an effect breaks)."""
+    text: str | None = None
+    """:func:`var_text` of ``var``, written the first time an ordering needs it."""
 
 
 Access: TypeAlias = tuple[
@@ -41,13 +47,21 @@ Access: TypeAlias = tuple[
     tuple[VarHistory, ...],
     tuple[tuple[VarHistory, str], ...],
     tuple[VarHistory, ...],
+    tuple[VarHistory, ...],
+    tuple[Atom, ...],
+    tuple[Atom, ...],
 ]
-"""An effect's accesses with the histories it reads, writes (and how) and changes."""
+"""An effect's accesses with the histories it reads, writes (and how) and changes,
+the histories of the atoms it adds, and the atoms it adds and deletes."""
 
 
 def subject_text(hist: VarHistory) -> str:
-    """What an ordering on ``hist`` protects, as the orderings write it."""
-    return var_text(hist.var)
+    """What an ordering on ``hist`` protects, as the orderings write it (written
+    once per variable: many orderings protect the same one)."""
+    text = hist.text
+    if text is None:
+        text = hist.text = var_text(hist.var)
+    return text
 
 
 def var_text(var: Var) -> str:

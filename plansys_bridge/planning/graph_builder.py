@@ -1,0 +1,385 @@
+"""Simulating a plan's happenings to find which must wait for which.
+
+The plan's happenings are simulated in plan order on the current knowledge (see
+:mod:`plansys_bridge.planning.plan_graph` for what the orderings mean). Each ground
+atom and numeric fluent has a :class:`~plansys_bridge.planning.var_history.VarHistory`
+of accesses; accesses that do not commute are ordered as in the plan, and every
+condition is evaluated exactly so that an unexplained requirement can be named.
+
+Why it is shaped as it is: the executor builds this graph once per plan, and a plan
+repeats few ground actions many times (a robot going round and round). So what a
+ground action's start, over-all and end read and write is worked out once per
+ground action (when it is the same in every state, see
+:func:`~plansys_bridge.planning.effect_access.reads_fixed`), and each happening
+then records all its accesses in one call whose loops do the common atom cases
+inline. Conditions or effects that depend on the state take the general way at
+every happening.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Sequence
+
+from plansys_bridge.errors import ExecutionError
+from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
+from plansys_bridge.knowledge.state import State
+from plansys_bridge.pddl.model import And, Atom, Condition, Domain, Effect
+from plansys_bridge.planning.effect_access import (
+    EffectAccess,
+    Var,
+    condition_vars,
+    effect_access,
+    reads_fixed,
+    writes_fixed,
+    written_names,
+)
+from plansys_bridge.planning.orderings import GROUND, Kind, UnexplainedRequirement, When
+from plansys_bridge.planning.plan import PlanStep
+from plansys_bridge.planning.requirement_text import describe_unmet
+from plansys_bridge.planning.var_history import Access, VarHistory
+
+__all__ = ["Edges", "GraphBuilder"]
+
+Edges = dict[tuple[int, int], tuple[Kind, VarHistory]]
+"""(source happening, target happening) -> why, and on which variable."""
+
+_Reads = tuple[VarHistory, ...] | None
+"""A condition's histories, in the order it reads them; None: ask at each happening."""
+
+
+class _Moves:
+    """What one ground action's happenings read and write, worked out the first
+    time each part is needed (a part that depends on the state stays ``None``)."""
+
+    __slots__ = (
+        "check_end",
+        "check_over",
+        "check_start",
+        "end",
+        "end_access",
+        "over",
+        "start",
+        "start_access",
+        "watched",
+    )
+
+    def __init__(self, g: GroundAction) -> None:
+        # an empty conjunction holds everywhere and reads nothing: not asked at all
+        self.check_start = type(g.at_start) is not And or bool(g.at_start.operands)
+        self.check_over = type(g.over_all) is not And or bool(g.over_all.operands)
+        self.check_end = type(g.at_end) is not And or bool(g.at_end.operands)
+        self.start: _Reads = None
+        self.start_access: Access | None = None
+        self.over: _Reads = None
+        self.watched: tuple[VarHistory, ...] = ()
+        self.end: _Reads = None
+        self.end_access: Access | None = None
+
+
+_AT_START: When = "at start"
+_AT_END: When = "at end"
+_PARTS = ("start", "end")
+_ACCESS_PARTS = ("start_access", "end_access")
+"""The :class:`_Moves` slots of a happening's condition reads and effect access,
+by the happening's parity."""
+
+
+class GraphBuilder:
+    """One build: ground the steps, simulate their happenings, keep the edges.
+
+    Happenings are ints: ``2*step`` (start), ``2*step+1`` (end).
+    """
+
+    def __init__(self, steps: Sequence[PlanStep], domain: Domain, state: State, ev: Evaluator):
+        self.domain = domain
+        self.initial = state
+        self.ev = ev
+        self.steps = tuple(steps)
+        self.edges: Edges = {}
+        self.succ: list[list[int]] = [[] for _ in range(2 * len(self.steps))]
+        """Per happening, the targets of its edges (in the order they were found)."""
+        self.vars: dict[Var, VarHistory] = {}
+        self.unexplained: list[UnexplainedRequirement] = []
+        self.achieved: dict[VarHistory, int] = {}
+        """Per atom's history, the step whose effect last set it (keyed by history:
+        hashing an atom is a Python call, a history's identity hash is not)."""
+        self.pos: list[int] = []
+        self._changeable: set[tuple[str, str]] | None = set()
+        self._derived = ev._derived_rules
+
+    # ------------------------------------------------------------ grounding
+
+    def ground(self) -> tuple[tuple[GroundAction, ...], list[_Moves]]:
+        """Every step's ground action and its (shared) moves; an unknown action or a
+        wrong argument list raises :class:`ExecutionError` naming the step."""
+        out: list[GroundAction] = []
+        moves: list[_Moves] = []
+        actions = {a.name: a for a in self.domain.actions}
+        # plans repeat actions (a robot going back and forth): ground each once, all
+        # in the same initial state, and share the (frozen) result
+        seen: dict[tuple[str, tuple[str, ...]], tuple[GroundAction, _Moves]] = {}
+        changeable = self._changeable
+        named: set[str] = set()  # grounding only substitutes arguments: names stay
+        for i, step in enumerate(self.steps):
+            key = (step.action, step.arguments)
+            if key in seen:
+                g, m = seen[key]
+                out.append(g)
+                moves.append(m)
+                continue
+            action = actions.get(step.action)
+            if action is None:
+                raise ExecutionError(
+                    f"plan step {i} {step.text}: domain {self.domain.name!r} "
+                    f"has no action {step.action!r}"
+                )
+            if len(action.parameters) != len(step.arguments):
+                raise ExecutionError(
+                    f"plan step {i} {step.text}: action {step.action!r} takes "
+                    f"{len(action.parameters)} arguments, got {len(step.arguments)}"
+                )
+            try:
+                g = self.ev.ground_action(action, step.arguments, self.initial)
+            except Exception as exc:  # the evaluator's own error names the cause
+                raise ExecutionError(f"plan step {i} {step.text}: {exc}") from exc
+            m = _Moves(g)
+            seen[key] = (g, m)
+            out.append(g)
+            moves.append(m)
+            if changeable is not None and step.action not in named:
+                named.add(step.action)
+                for effect in (g.start_effect, g.end_effect):
+                    names = written_names(effect) if changeable is not None else None
+                    changeable = None if names is None else changeable | names  # type: ignore[operator]
+        self._changeable = changeable
+        return tuple(out), moves
+
+    # ------------------------------------------------------------ simulating
+
+    def simulate(
+        self, ground: Sequence[GroundAction], moves: Sequence[_Moves], order: Sequence[int]
+    ) -> State:
+        """Run the happenings in ``order``; returns the state the plan leads to."""
+        pos = self.pos = [0] * (2 * len(self.steps))
+        for p, h in enumerate(order):
+            pos[h] = p
+        ev, steps, achieved = self.ev, self.steps, self.achieved
+        holds = ev.holds
+        state = self.initial
+        open_over_all: dict[int, Collection[VarHistory]] = {}
+        watchers: dict[VarHistory, set[int]] = {}
+        for h in order:
+            i = h >> 1
+            g = ground[i]
+            m = moves[i]
+            end = h & 1
+            if end:
+                cond, effect, check = g.at_end, g.end_effect, m.check_end
+                reads, access, when = m.end, m.end_access, _AT_END
+            else:
+                cond, effect, check = g.at_start, g.start_effect, m.check_start
+                reads, access, when = m.start, m.start_access, _AT_START
+            if check:
+                if reads is None:
+                    reads = self._reads(cond, state, m, _PARTS[end])
+                if not holds(cond, state, GROUND, steps[i].duration):
+                    self._unexplained(i, when, cond, state)
+            # the over-all interval closes before the end effects
+            # (a watched variable keeps its entry in ``watchers`` once it has one)
+            if end and i in open_over_all:
+                for var in open_over_all.pop(i):
+                    watchers[var].discard(i)
+            if access is None:
+                access = self._access(effect, state, m, _ACCESS_PARTS[end])
+            found, read, writes, written, added, adds, deleted = access
+            if found.plain:  # same adds and deletes in every state: no need to walk
+                # (deletes go first, so every atom added is then true)
+                if adds or deleted:
+                    state = state.with_facts(deleted, adds)
+                for hist in added:
+                    achieved[hist] = i
+            else:
+                state = ev.apply(effect, state, GROUND, steps[i].duration)
+                for hist in added:
+                    if hist.var[1] in state:
+                        achieved[hist] = i
+            if reads:
+                self._read_all(h, reads + read if read else reads, h)
+            elif read:
+                self._read_all(h, read, h)
+            if writes:
+                self._write_all(h, writes)
+            if not end and m.check_over:
+                over = m.over
+                if over is None:
+                    over = self._reads(g.over_all, state, m, "over")
+                if over:
+                    self._read_all(h, over, h + 1)
+                if not holds(g.over_all, state, GROUND, steps[i].duration):
+                    self._unexplained(i, "over all", g.over_all, state)
+                else:
+                    watched = m.watched if m.over is not None else self._watched(over)
+                    if watched:
+                        open_over_all[i] = watched
+                        for var in watched:
+                            if var in watchers:
+                                watchers[var].add(i)
+                            else:
+                                watchers[var] = {i}
+            # re-check the over-all conditions this happening may have broken
+            if watchers:
+                for var in written:
+                    if watchers.get(var):
+                        self._recheck(i, watchers[var], ground, state, open_over_all, watchers)
+        return state
+
+    def _recheck(
+        self,
+        i: int,
+        watching: set[int],
+        ground: Sequence[GroundAction],
+        state: State,
+        open_over_all: dict[int, Collection[VarHistory]],
+        watchers: dict[VarHistory, set[int]],
+    ) -> None:
+        """Check again the over-all requirements of the ``watching`` steps after step
+        ``i`` changed a variable they read; a broken one is named and unwatched."""
+        for j in tuple(watching):
+            if j == i:
+                continue
+            gj = ground[j]
+            if not self.ev.holds(gj.over_all, state, GROUND, self.steps[j].duration):
+                detail = f"is broken by step {i} {self.steps[i].text} while it runs"
+                self._unexplained(j, "over all", gj.over_all, state, detail)
+                for v in open_over_all.pop(j, ()):
+                    watchers[v].discard(j)
+
+    # ------------------------------------------------------------ accesses
+
+    def _reads(self, cond: Condition, state: State, m: _Moves, part: str) -> tuple[VarHistory, ...]:
+        """The histories ``cond`` reads in ``state``, kept in ``m`` (with the
+        over-all ones worth watching) when they are the same in every state."""
+        found = tuple(map(self._history, condition_vars(self.ev, cond, GROUND, state)))
+        if reads_fixed(cond, self._derived):
+            setattr(m, part, found)
+            if part == "over":
+                m.watched = self._watched(found)
+        return found
+
+    def _watched(self, over: Collection[VarHistory]) -> tuple[VarHistory, ...]:
+        """The over-all reads some action may change (only they can be broken)."""
+        return tuple(var for var in over if var.changeable)
+
+    def _access(self, effect: Effect, state: State, m: _Moves, part: str) -> Access:
+        """What ``effect`` reads and writes in ``state``, kept in ``m`` when it is
+        the same in every state."""
+        fixed = writes_fixed(effect)
+        found = self._resolve(effect_access(self.ev, effect, state, fixed))
+        if fixed:
+            setattr(m, part, found)
+        return found
+
+    def _resolve(self, access: EffectAccess) -> Access:
+        """``access`` with its variables' histories (the written ones in the order
+        of ``access.written``), the histories of the atoms it adds, and the atoms
+        it adds and deletes."""
+        history = self._history
+        return (
+            access,
+            tuple(map(history, access.read)),
+            tuple((history(var), kind) for var, kind in access.writes),
+            tuple(map(history, access.written)),
+            tuple([history(("a", atom)) for atom in access.adds]),
+            tuple(access.adds),
+            tuple(access.deleted),
+        )
+
+    def _history(self, var: Var) -> VarHistory:
+        hist = self.vars.get(var)
+        if hist is None:
+            changeable = self._changeable
+            if var[0] == "a":
+                atom = var[1]
+                assert isinstance(atom, Atom)
+                hist = VarHistory(var, True, "add" if atom in self.initial else "del")
+                name = atom.predicate
+            else:
+                hist = VarHistory(var, False, "read")
+                name = var[1][0]  # type: ignore[index]
+            hist.changeable = changeable is None or (var[0], name) in changeable
+            self.vars[var] = hist
+        return hist
+
+    def _read_all(self, h: int, reads: Sequence[VarHistory], tail: int) -> None:
+        """Happening ``h`` reads ``reads`` until happening ``tail`` (its own, or its
+        step's end for an over-all requirement). An atom read waits for the atom's
+        latest writer (written out here: a happening makes a few such reads); a
+        fluent read takes :meth:`_read`."""
+        pos, edges, succ, mine, step = self.pos, self.edges, self.succ, self.pos[h], h >> 1
+        for hist in reads:
+            if not hist.is_atom:
+                self._read(hist, h, tail)
+                continue
+            src = hist.latest_effect
+            if src is not None and src >> 1 != step and pos[src] < mine:
+                if (src, h) not in edges:
+                    edges[(src, h)] = ("causal", hist)
+                    succ[src].append(h)
+                elif edges[(src, h)][0] != "causal":
+                    edges[(src, h)] = ("causal", hist)
+            hist.current.append((tail, None))
+
+    def _write_all(self, h: int, writes: Sequence[tuple[VarHistory, str]]) -> None:
+        """Happening ``h`` writes: after the members of the variable's previous run
+        (a write of the current run's kind commutes with the run, except an
+        assignment), keeping a causal or earlier reason for a pair."""
+        pos, edges, succ, mine, step = self.pos, self.edges, self.succ, self.pos[h], h >> 1
+        for hist, kind in writes:
+            if hist.kind == kind and kind != "assign":
+                members = hist.previous
+            else:
+                members = hist.previous = hist.current
+                hist.current = []
+                hist.kind = kind
+            for src, role in members:
+                if src >> 1 == step or pos[src] >= mine or (src, h) in edges:
+                    continue
+                edges[(src, h)] = ("effects" if role == "effects" else "threat", hist)
+                succ[src].append(h)
+            hist.current.append((h, "effects"))
+            hist.latest_effect = h
+
+    def _read(self, hist: VarHistory, head: int, tail: int) -> None:
+        """A fluent read: after every member of the last run of changes."""
+        if hist.kind == "read":
+            for src, _ in hist.previous:
+                self._edge(src, head, "causal", hist)
+            hist.current.append((tail, None))
+            return
+        hist.previous = hist.current
+        hist.current = [(tail, None)]
+        hist.kind = "read"
+        for src, _ in hist.previous:
+            self._edge(src, head, "causal", hist)
+
+    def _edge(self, src: int, dst: int, kind: Kind, hist: VarHistory) -> None:
+        if src // 2 == dst // 2:
+            return
+        if self.pos[src] >= self.pos[dst]:
+            # never order against the plan (an over-all read that ends after this
+            # happening: either the plan is wrong, which check() reports, or the
+            # atom was read by a branch of the condition that does not matter)
+            return
+        key = (src, dst)
+        found = self.edges.get(key)
+        if found is None:
+            self.edges[key] = (kind, hist)
+            self.succ[src].append(dst)
+        elif kind == "causal" and found[0] != "causal":
+            self.edges[key] = (kind, hist)
+
+    def _unexplained(
+        self, i: int, when: When, cond: Condition, state: State, detail: str = ""
+    ) -> None:
+        text = describe_unmet(self.ev, cond, state, GROUND, self.steps[i].duration)
+        self.unexplained.append(UnexplainedRequirement(i, self.steps[i].text, when, text, detail))
