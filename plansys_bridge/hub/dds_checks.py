@@ -14,7 +14,6 @@ executor nor reach the knowledge.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Mapping, Set
 
 from plansys_bridge.hub import messages as hm
@@ -30,11 +29,19 @@ def _fraction(name: str, value: float) -> str | None:
 
 
 def check_sample(topic: str, msg: object) -> str | None:
-    """The checks that need no mission: ranges."""
+    """The checks that need no mission: ranges.
+
+    An ``ActionExecution`` (every message of an auction, checked on the reader
+    thread) is checked without a call: ``not x >= 0`` holds for NaN too.
+    """
     if isinstance(msg, hm.ActionExecution):
-        if msg.bid is not None and (math.isnan(msg.bid) or msg.bid < 0):
-            return f"bid {msg.bid!r} is not a cost >= 0"
-        return _fraction("completion", msg.completion)
+        bid = msg.bid
+        if bid is not None and not bid >= 0:
+            return f"bid {bid!r} is not a cost >= 0"
+        completion = msg.completion
+        if 0.0 <= completion <= 1.0:
+            return None
+        return f"completion {completion!r} is outside 0..1"
     if isinstance(msg, hm.ActionExecutionInfo):
         if msg.duration < 0:
             return f"duration {msg.duration!r} is negative"
