@@ -86,7 +86,11 @@ class Plan:
         return Plan(tuple(sorted(self.steps, key=lambda s: (s.time, s.text))))
 
     def to_msg(self) -> PlanMsg:
-        return PlanMsg(tuple(s.to_item() for s in self.steps))
+        """The plan as the hub sends it (each item as :meth:`PlanStep.to_item` makes
+        it, made here in one comprehension: the executor sends every plan it runs)."""
+        return PlanMsg(
+            tuple([PlanItem(time=s.time, action=s.text, duration=s.duration) for s in self.steps])
+        )
 
     @classmethod
     def from_msg(cls, msg: PlanMsg) -> Plan:

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from plansys_bridge.planning.plan import PlanStep, parse_plan
+from plansys_bridge.planning.plan import Plan, PlanStep, parse_plan
 
 _NAMES = st.text(alphabet="abcxyz_-0123456789", min_size=1, max_size=8)
 
@@ -51,3 +51,23 @@ def test_the_text_is_frozen_and_not_an_argument() -> None:
         "arguments",
         "duration",
     ]
+
+
+@given(
+    st.lists(
+        st.tuples(st.floats(0, 1e6, allow_nan=False), _NAMES, st.lists(_NAMES, max_size=3)),
+        max_size=6,
+    )
+)
+def test_a_plan_message_lists_each_step_as_its_item(
+    rows: list[tuple[float, str, list[str]]],
+) -> None:
+    plan = Plan(tuple(PlanStep(t, a, tuple(args), 1.5) for t, a, args in rows))
+    msg = plan.to_msg()
+    assert msg.items == tuple(step.to_item() for step in plan.steps)
+    assert Plan.from_msg(msg) == Plan(
+        tuple(
+            PlanStep(s.time, s.action.lower(), tuple(a.lower() for a in s.arguments), 1.5)
+            for s in plan.steps
+        )
+    )
