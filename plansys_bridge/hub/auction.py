@@ -63,8 +63,6 @@ __all__ = [
 ]
 
 _request_ids = itertools.count(1)
-
-
 _INCOMING = frozenset({ExecutionType.RESPONSE, ExecutionType.FEEDBACK, ExecutionType.FINISH})
 _RESPONSE = ExecutionType.RESPONSE
 """Read once: an enum member read off its class costs about 0.3 us on Python 3.11,
@@ -84,6 +82,37 @@ class ActionClient(DrivenFuture[ActionOutcome]):
     awaits ``run()``. Either way the confirmed performer receives a CANCEL.
     """
 
+    # Defaults read from the class until a client sets its own (immutable values):
+    # a client is made per executed action and most of these never change for it.
+    phase: ClientPhase = ClientPhase.NEW
+    performer = ""
+    """The confirmed performer's node name, once there is one."""
+    completion = 0.0
+    status = ""
+    requests_sent = 0
+    _cancel_requested = False
+    _cancel_sent_to: str | None = None
+    _last_seen = 0.0
+    _confirm_cb: Callable[[str], None] | None = None
+    _feedback_cb: FeedbackCallback | None = None
+    _freed = False
+    """A matching performer went from RUNNING to READY: worth asking again now."""
+    _liveness: LivenessTable | None = None
+    _sub: Subscription | None = None
+    _timer: asyncio.TimerHandle | None = None
+    _timer_at = math.inf
+    # the action's auctions (one, more after a lost performer)
+    _excluded: frozenset[str] = frozenset()
+    _lost: tuple[str, ...] = ()
+    _reauctioned = 0
+    # the current auction (set by _begin_auction)
+    _start = 0.0
+    _give_up_at = 0.0
+    _sent = 0
+    _bids: list[tuple[float, int, str]]
+    _seen: set[str]
+    _bid_deadline = math.inf
+
     def __init__(
         self,
         hub: Hub,
@@ -98,36 +127,8 @@ class ActionClient(DrivenFuture[ActionOutcome]):
         self.arguments = tuple(arguments)
         self.request_id = request_id if request_id is not None else f"{action}#{next(_request_ids)}"
         self.policy = policy if policy is not None else AuctionPolicy()
-        self.phase = ClientPhase.NEW
-        self.performer = ""
-        """The confirmed performer's node name, once there is one."""
-        self.completion = 0.0
-        self.status = ""
-        self.requests_sent = 0
-        self._cancel_requested = False
-        self._cancel_sent_to: str | None = None
-        self._last_seen = 0.0
         self._pending_bidders: list[str] = []
-        self._confirm_cb: Callable[[str], None] | None = None
-        self._feedback_cb: FeedbackCallback | None = None
-        self._freed = False
-        """A matching performer went from RUNNING to READY: worth asking again now."""
-        self._liveness: LivenessTable | None = None
         self._unwatch: Callable[[], None] = _nothing
-        self._sub: Subscription | None = None
-        self._timer: asyncio.TimerHandle | None = None
-        self._timer_at = math.inf
-        # the action's auctions (one, more after a lost performer)
-        self._excluded: set[str] = set()
-        self._lost: list[str] = []
-        self._reauctioned = 0
-        # the current auction
-        self._start = 0.0
-        self._give_up_at = 0.0
-        self._sent = 0
-        self._bids: list[tuple[float, int, str]] = []
-        self._seen: set[str] = set()
-        self._bid_deadline = math.inf
         self._publish = hub.publish
 
     @property
@@ -349,8 +350,8 @@ class ActionClient(DrivenFuture[ActionOutcome]):
         # Stop it in case it is only mute, and never pick it again.
         winner = self.performer
         self._send_cancel()
-        self._excluded.add(winner)
-        self._lost.append(winner)
+        self._excluded = self._excluded | {winner}
+        self._lost = (*self._lost, winner)
         reauctioned = self._reauctioned
         if reauctioned >= self.policy.reauctions:
             why = (
@@ -382,7 +383,7 @@ class ActionClient(DrivenFuture[ActionOutcome]):
             self._reauctioned,
             cancelled,
             gave_up,
-            tuple(self._lost),
+            self._lost,
         )
         self._end()
         self._resolve(outcome)
