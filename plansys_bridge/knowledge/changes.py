@@ -183,21 +183,22 @@ class ChangeTracker:
         if not (added or removed):
             return
         self.version += 1
-        self._notify(
-            KnowledgeChange._made(
-                version=self.version,
-                reason=reason,
-                added_instances={},
-                removed_instances={},
-                added_facts=frozenset(added) if added else _NONE,
-                removed_facts=frozenset(removed) if removed else _NONE,
-                changed_fluents={},
-                removed_fluents=_NONE,
-                goal_changed=False,
-                goal=self._goal,
-                state=self._state,
-            )
+        # KnowledgeChange._made, inlined (two of these per executed action)
+        change = object.__new__(KnowledgeChange)
+        change.__dict__.update(
+            version=self.version,
+            reason=reason,
+            added_instances={},
+            removed_instances={},
+            added_facts=frozenset(added) if added else _NONE,
+            removed_facts=frozenset(removed) if removed else _NONE,
+            changed_fluents={},
+            removed_fluents=_NONE,
+            goal_changed=False,
+            goal=self._goal,
+            state=state,
         )
+        self._notify(change)
 
     def _notify(self, change: KnowledgeChange) -> None:
         for callback in list(self._subscribers):

@@ -311,7 +311,7 @@ class Evaluator(Reasoner):
         With a ``state`` the arguments are checked: known objects of the right type.
         """
         act = self.get_action(action) if isinstance(action, str) else action
-        arguments = tuple(a.lower() for a in args)
+        arguments = tuple([a.lower() for a in args])
         if len(arguments) != len(act.parameters):
             raise KnowledgeError(
                 f"action {act.name} takes {len(act.parameters)} arguments, got {len(arguments)}: "

@@ -76,7 +76,8 @@ def ground_args(args: tuple[str, ...], bindings: Mapping[str, str]) -> tuple[str
 
 
 def _sub_args(args: tuple[str, ...], b: Mapping[str, str]) -> tuple[str, ...]:
-    return tuple(b.get(a, a) if a[:1] == "?" else a for a in args)
+    # a list comprehension: a generator is resumed (a call) once per argument
+    return tuple([b.get(a, a) if a[:1] == "?" else a for a in args])
 
 
 class _Substitute(Transformer):

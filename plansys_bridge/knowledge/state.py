@@ -105,7 +105,14 @@ class State:
         return True
 
     def __contains__(self, atom: object) -> bool:
-        return isinstance(atom, Atom) and atom.args in self._index.get(atom.predicate, _EMPTY)
+        # The class compared first and the index subscripted: the executor asks
+        # about each fact of an at-start effect, and isinstance and get are calls.
+        if atom.__class__ is not Atom and not isinstance(atom, Atom):
+            return False
+        try:
+            return atom.args in self._index[atom.predicate]
+        except KeyError:
+            return False
 
     def value(self, name: str, args: Args = ()) -> float | None:
         """The fluent's value, or None when it is undefined."""
@@ -204,9 +211,13 @@ class State:
         index = self._index
         new_index = index
         emptied = False
+        # Subscripts rather than get(): no call when the predicate is there.
         for atom in deletes:
-            current = new_index.get(atom.predicate)
-            if current is None or atom.args not in current:
+            try:
+                current = new_index[atom.predicate]
+            except KeyError:
+                continue
+            if atom.args not in current:
                 continue
             if new_index is index:
                 new_index = dict(index)
@@ -215,7 +226,10 @@ class State:
             current = new_index[atom.predicate] = current.difference((atom.args,))
             emptied = emptied or not current
         for atom in adds:
-            current = new_index.get(atom.predicate, _EMPTY)
+            try:
+                current = new_index[atom.predicate]
+            except KeyError:
+                current = _EMPTY
             if atom.args in current:
                 continue
             if new_index is index:

@@ -58,3 +58,18 @@ def test_unchanged_tables_are_shared() -> None:
     v = u.with_changes(objects={"a": "object", "b": "object"})
     assert not v.same_objects(u) and v.objects == {"a": "object", "b": "object"}
     assert len(v) == 2 and Atom("q", ("a",)) in v and "q" in set(v.predicates())
+
+
+class _Lookalike:
+    """Not an atom, though it has an atom's fields."""
+
+    def __init__(self, atom: Atom) -> None:
+        self.predicate, self.args = atom.predicate, atom.args
+
+
+@given(facts=st.sets(atoms, max_size=8), asked=atoms)
+def test_membership_is_membership_in_the_facts(facts: set[Atom], asked: Atom) -> None:
+    state = State(facts)
+    assert (asked in state) == (asked in state.facts) == (asked in facts)
+    assert _Lookalike(asked) not in state and (asked.predicate, asked.args) not in state
+    assert None not in state and "p" not in state
