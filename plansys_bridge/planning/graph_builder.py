@@ -23,7 +23,7 @@ from collections.abc import Collection, Sequence
 from plansys_bridge.errors import ExecutionError
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
 from plansys_bridge.knowledge.state import State
-from plansys_bridge.pddl.model import And, Atom, Condition, Domain, Effect
+from plansys_bridge.pddl.model import And, Atom, Condition, Domain, Effect, Not
 from plansys_bridge.planning.effect_access import (
     EffectAccess,
     Var,
@@ -58,6 +58,7 @@ class _Moves:
         "end",
         "end_access",
         "over",
+        "over_holds",
         "start",
         "start_access",
         "watched",
@@ -72,8 +73,21 @@ class _Moves:
         self.start_access: Access | None = None
         self.over: _Reads = None
         self.watched: tuple[VarHistory, ...] = ()
+        self.over_holds: bool | None = None
+        """Whether the over-all requirement holds, kept when its value cannot change
+        during the plan (literals of atoms no action of the plan changes)."""
         self.end: _Reads = None
         self.end_access: Access | None = None
+
+
+def _literals(cond: Condition) -> bool:
+    """A conjunction of atoms and negated atoms: its value depends only on them."""
+    kind = type(cond)
+    if kind is And:
+        return all(map(_literals, cond.operands))  # type: ignore[union-attr]
+    if kind is Not:
+        return type(cond.operand) is Atom  # type: ignore[union-attr]
+    return kind is Atom
 
 
 _AT_START: When = "at start"
@@ -215,7 +229,12 @@ class GraphBuilder:
                     over = self._reads(g.over_all, state, m, "over")
                 if over:
                     self._read_all(h, over, h + 1)
-                if not holds(g.over_all, state, GROUND, steps[i].duration):
+                ok = m.over_holds
+                if ok is None:
+                    ok = holds(g.over_all, state, GROUND, steps[i].duration)
+                    if m.over is not None and not m.watched and _literals(g.over_all):
+                        m.over_holds = ok  # reads only what no action changes
+                if not ok:
                     self._unexplained(i, "over all", g.over_all, state)
                 else:
                     watched = m.watched if m.over is not None else self._watched(over)
