@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable, Iterable
+from collections.abc import Callable, Hashable, Iterable, Sequence
 
 from plansys_bridge.clock import Clock, WallClock
 from plansys_bridge.hub.liveness import LivenessTable
@@ -31,13 +31,13 @@ class Hub:
         self.publish: Callable[[str, object], None] = self.transport.publish
         """``publish(topic, msg)``: the transport's own method, bound once, so a message
         costs no call of the hub's (an action's auction publishes about ten)."""
-        self.publish_many: Callable[[str, list[object]], None] = getattr(
+        self.publish_many: Callable[[str, Sequence[object]], None] = getattr(
             self.transport, "publish_many", self._publish_each
         )
         """``publish_many(topic, msgs)``: ``publish`` for each, in one call where the
         transport can (the REJECTs that end an auction)."""
 
-    def _publish_each(self, topic: str, messages: list[object]) -> None:
+    def _publish_each(self, topic: str, messages: Sequence[object]) -> None:
         for msg in messages:
             self.publish(topic, msg)
 

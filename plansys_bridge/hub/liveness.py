@@ -24,6 +24,9 @@ __all__ = ["LivenessTable", "could_serve"]
 
 FreedCallback = Callable[[ActionPerformerStatus], None]
 
+_RUNNING = PerformerState.RUNNING
+_READY = PerformerState.READY
+
 
 class LivenessTable:
     """Heartbeats of ``performers_status``, one entry per node and action."""
@@ -37,19 +40,21 @@ class LivenessTable:
 
     def on_status(self, msg: object) -> None:
         """The ``performers_status`` subscriber."""
-        if not isinstance(msg, ActionPerformerStatus):
+        # The class compared first (isinstance is a call) and the states read from
+        # module constants: every performer sends one per action on every change.
+        if msg.__class__ is not ActionPerformerStatus and not isinstance(
+            msg, ActionPerformerStatus
+        ):
             return
         self.heartbeats += 1
+        state = msg.state
+        states = self._states
         key = (msg.node_name, msg.action)
-        previous = self._states.get(key)
-        self._states[key] = msg.state
-        if msg.state is PerformerState.RUNNING:
+        previous = states.get(key)
+        states[key] = state
+        if state is _RUNNING:
             self._last_running[msg.node_name] = asyncio.get_running_loop().time()
-        elif (
-            msg.state is PerformerState.READY
-            and previous is PerformerState.RUNNING
-            and msg.action in self._watchers
-        ):
+        elif state is _READY and previous is _RUNNING and msg.action in self._watchers:
             for callback in list(self._watchers[msg.action]):
                 callback(msg)
 

@@ -8,6 +8,7 @@ PlanSys2 user recognises every field. Stamps are float seconds of the hub's cloc
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from enum import IntEnum
 
@@ -203,17 +204,32 @@ def performer_status(
     node_name: str,
 ) -> ActionPerformerStatus:
     """``ActionPerformerStatus(...)`` filled in at once, as :func:`action_execution`
-    does: a performer sends one per action it serves on every change of state, two
-    changes per action it executes."""
-    msg = _new(ActionPerformerStatus)
-    msg.__dict__.update(
-        status_stamp=stamp,
-        state=state,
-        action=action,
-        specialized_arguments=specialized_arguments,
-        node_name=node_name,
-    )
-    return msg
+    does (one status of :func:`performer_statuses`)."""
+    return performer_statuses(stamp, state, ((action, specialized_arguments),), node_name)[0]
+
+
+def performer_statuses(
+    stamp: float,
+    state: PerformerState,
+    served: Iterable[tuple[str, tuple[str, ...]]],
+    node_name: str,
+) -> list[ActionPerformerStatus]:
+    """``ActionPerformerStatus(...)`` for each ``(action, specialized_arguments)``
+    served, in order, filled in at once as :func:`action_execution` does: a performer
+    sends one per action it serves on every change of state (two changes per action
+    it executes), all built in one call."""
+    made = []
+    for action, specialized_arguments in served:
+        msg = _new(ActionPerformerStatus)
+        msg.__dict__.update(
+            status_stamp=stamp,
+            state=state,
+            action=action,
+            specialized_arguments=specialized_arguments,
+            node_name=node_name,
+        )
+        made.append(msg)
+    return made
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ from itertools import count
 from typing import Any
 
 from plansys_bridge.hub.messages import ActionExecution, ExecutionType, Topics
-from plansys_bridge.hub.transport import Subscription, report_subscriber_error
+from plansys_bridge.hub.transport import Subscription, redirect, report_subscriber_error
 
 __all__ = [
     "TopicRouter",
@@ -92,9 +92,11 @@ def arguments_match(specialized: Sequence[str], arguments: Sequence[str]) -> boo
     No specialised arguments matches every call. Lengths may differ (PlanSys2 only
     warns): the positions both have are compared.
     """
-    if not specialized:
-        return True
-    return all(s == "" or s == a for s, a in zip(specialized, arguments, strict=False))
+    # A loop rather than all(...): no generator made per call (a REQUEST's check).
+    for s, a in zip(specialized, arguments, strict=False):  # noqa: SIM110
+        if s != "" and s != a:
+            return False
+    return True
 
 
 def _specialised(key: Hashable) -> tuple[str, tuple[str, ...]] | None:
@@ -207,6 +209,7 @@ class TopicRouter:
         sub = _RoutedSubscription(self, callback, key_tuple, next(self._order))
         if key_tuple is None or self._router is None:
             self._everyone = [*self._everyone, sub]
+            self._rewire()
             return sub
         for key in key_tuple:
             # _specialised, for the keys that may be one (a client's never are)
@@ -225,11 +228,13 @@ class TopicRouter:
                 self._keyed[key] = [*self._keyed.get(key, ()), sub]
                 sub.routes.append(key)
         self._all_keyed[sub] = None
+        self._rewire()
         return sub
 
     def _remove(self, sub: _RoutedSubscription) -> None:
         if sub in self._everyone:
             self._everyone = [s for s in self._everyone if s is not sub]
+            self._rewire()
             return
         for key in sub.routes:
             remaining = [s for s in self._keyed.get(key, ()) if s is not sub]
@@ -247,6 +252,21 @@ class TopicRouter:
                 self._specialised_subs.pop(route, None)
                 self._specialised.pop(route, None)
         self._all_keyed.pop(sub, None)
+        self._rewire()
+
+    def _rewire(self) -> None:
+        """Where the transport delivers: on a topic without routes and with one
+        subscriber, to that subscriber itself (a call less per message: a performer's
+        statuses reach the liveness table so); else to :meth:`dispatch`. Closing the
+        subscriber rewires before anything else is delivered."""
+        sub = self.transport_subscription
+        if sub is None:
+            return
+        everyone = self._everyone
+        if self._router is None and len(everyone) == 1 and not self._all_keyed:
+            redirect(sub, everyone[0].callback)
+        else:
+            redirect(sub, self.dispatch)
 
     def __len__(self) -> int:
         return len(self._everyone) + len(self._all_keyed)

@@ -14,12 +14,19 @@ from __future__ import annotations
 import asyncio
 import logging
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from itertools import repeat
 from typing import Protocol, runtime_checkable
 
 from plansys_bridge.errors import HubError
 
-__all__ = ["InProcessTransport", "Subscription", "Transport", "report_subscriber_error"]
+__all__ = [
+    "InProcessTransport",
+    "Subscription",
+    "Transport",
+    "redirect",
+    "report_subscriber_error",
+]
 
 log = logging.getLogger(__name__)
 
@@ -161,18 +168,32 @@ class InProcessTransport:
         else:
             loop.call_soon_threadsafe(self._deliver, topic, subs, msg)
 
-    def publish_many(self, topic: str, messages: list[object]) -> None:
-        """Publish ``messages`` on ``topic`` in order, as ``publish`` one by one would:
-        the end of an auction among N bidders is N-1 REJECTs, one call instead of N-1
-        when a delivery is already scheduled."""
-        pending = self._pending
+    def publish_many(self, topic: str, messages: Sequence[object]) -> None:
+        """Publish ``messages`` on ``topic`` in order, as ``publish`` one by one would,
+        in one call: the end of an auction among N bidders is N-1 REJECTs, and a
+        performer's change of state one status per action it serves. The drain is
+        scheduled when the first message would have scheduled it."""
         subs = self._subscribers.get(topic)
-        if not pending or self._closed or not subs or threading.get_ident() != self._loop_thread:
+        loop = self._loop
+        if (
+            self._closed
+            or not subs
+            or loop is None
+            or threading.get_ident() != self._loop_thread
+            or (not self._pending and loop.is_closed())
+        ):
+            # closed, nobody listening, not started, another thread or a closed loop:
+            # publish says what happens
             for msg in messages:
                 self.publish(topic, msg)
             return
+        if not messages:
+            return
+        pending = self._pending
+        if not pending:
+            loop.call_soon(self._drain)
         self.published += len(messages)
-        pending.extend([(topic, subs, msg) for msg in messages])
+        pending.extend(zip(repeat(topic), repeat(subs), messages))
 
     def publish_batch(self, messages: list[tuple[str, object]]) -> None:
         """Publish ``(topic, msg)`` pairs in order, from any thread.
@@ -220,6 +241,18 @@ class InProcessTransport:
                 sub.callback(msg)
             except Exception as exc:
                 report_subscriber_error(self._loop, topic, exc)
+
+
+def redirect(subscription: Subscription, callback: Callback) -> bool:
+    """Hand what ``subscription`` receives to ``callback`` from now on, messages already
+    queued included, where the transport allows it (in-process: yes); False where not.
+
+    A hub's router for a topic it does not route, with a single subscriber, passes
+    that subscriber to the transport instead of being called for each message."""
+    if isinstance(subscription, _InProcessSubscription) and not subscription.closed:
+        subscription.callback = callback
+        return True
+    return False
 
 
 def report_subscriber_error(
