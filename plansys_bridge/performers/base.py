@@ -28,9 +28,7 @@ import logging
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any, ClassVar
-
-from pydantic import BaseModel
+from typing import TYPE_CHECKING, Any
 
 from plansys_bridge.errors import HubError
 from plansys_bridge.hub.messages import (
@@ -39,11 +37,10 @@ from plansys_bridge.hub.messages import (
     PerformerState,
     Topics,
     action_execution,
-    performer_status,
+    performer_statuses,
 )
-from plansys_bridge.hub.routing import performer_keys
 from plansys_bridge.hub.transport import Subscription
-from plansys_bridge.performers.entry import PerformerConfig, construct, parse_entry
+from plansys_bridge.performers.entry import PerformerConfig, construct
 from plansys_bridge.performers.goal import (
     ActionFailed,
     ActionGoal,
@@ -52,7 +49,8 @@ from plansys_bridge.performers.goal import (
     goal_of,
     same_goal,
 )
-from plansys_bridge.plugins import NoSettings
+from plansys_bridge.performers.kind import PerformerKind
+from plansys_bridge.performers.listening import listen
 
 if TYPE_CHECKING:
     from plansys_bridge.performers.bid_costs import BidCosts
@@ -75,18 +73,17 @@ _RESPONSE = ExecutionType.RESPONSE
 _CONFIRM = ExecutionType.CONFIRM
 _REJECT = ExecutionType.REJECT
 _CANCEL = ExecutionType.CANCEL
+_RUNNING = PerformerState.RUNNING
+_READY = PerformerState.READY
+_STATUS = Topics.PERFORMERS_STATUS
+_ACTIONS_HUB = Topics.ACTIONS_HUB
+_INF = math.inf
 
 
-class ActionPerformer(ABC):
-    """Base class of every performer; subclasses implement :meth:`execute`."""
-
-    Settings: ClassVar[type[BaseModel]] = NoSettings
-    """The kind's mission-file keys besides the common ones, as a pydantic model
-    (:class:`~plansys_bridge.plugins.PluginSettings`); validated when the mission
-    loads and passed to ``__init__`` as ``settings=``."""
-    settings_keys: ClassVar[frozenset[str]] = frozenset()
-    """Older shape, still honoured when ``Settings`` is not declared: extra keys
-    passed to ``__init__`` as keywords, checked there."""
+class ActionPerformer(PerformerKind, ABC):
+    """Base class of every performer; subclasses implement :meth:`execute` (and declare
+    their mission-file settings as :class:`~plansys_bridge.performers.kind.PerformerKind`
+    says)."""
 
     def __init__(
         self,
@@ -136,11 +133,12 @@ class ActionPerformer(ABC):
         """Only a subclass's own filter is asked (the base one accepts everything)."""
         """A subclass decides what it serves itself: ask it (else the same rule is
         read off the REQUEST before any goal is built)."""
-        self._out = (
-            self.hub.publish if type(self)._publish is ActionPerformer._publish else self._publish
-        )
+        hooked = type(self)._publish is not ActionPerformer._publish
+        self._out = self._publish if hooked else self.hub.publish
         """Where messages go: the hub's publish itself unless a subclass hooks
         :meth:`_publish` (fault injection), a call less per message otherwise."""
+        self._out_many = self._publish_each if hooked else self.hub.publish_many
+        """Where the statuses of one change of state go, in one call unless hooked."""
         self.bid_costs: BidCosts | None = context.bid_costs.get(node_name)
         """Learned costs (the mission's ``bid_costs:``); where they know the action
         they are bid instead of :meth:`bid`."""
@@ -215,14 +213,17 @@ class ActionPerformer(ABC):
             self.state = PerformerState.FAILURE
             self._publish_status()
             raise
-        # Routed: REQUESTs for the actions served (only those matching the specialised
-        # arguments, unless a subclass decides what it serves), and the messages
-        # naming this node.
-        keys = performer_keys(
-            self.node_name, list(self.actions) if self._own_serves else self.actions
-        )
         self._loop = asyncio.get_running_loop()
-        self._subs = [self.hub.subscribe(Topics.ACTIONS_HUB, self._on_action_msg, keys=keys)]
+        # A subclass that hooks _on_action_msg hears every message there first.
+        plain = type(self)._on_action_msg is ActionPerformer._on_action_msg
+        self._subs = listen(
+            self.hub,
+            self.node_name,
+            self.actions,
+            by_arguments=not self._own_serves,
+            on_message=self._on_action_msg,
+            on_request=self._on_request if plain else None,
+        )
         self._running = True
         self.state = PerformerState.READY
         self._heartbeat()
@@ -305,7 +306,15 @@ class ActionPerformer(ABC):
         elif kind is _CANCEL:
             self._on_cancel_msg(msg)
 
-    def _on_request(self, msg: ActionExecution) -> None:
+    def _on_request(self, msg: object) -> None:
+        # Also the subscriber of the REQUEST route keys, so it checks what
+        # _on_action_msg would: an auction message, a REQUEST, the performer running.
+        if (
+            (msg.__class__ is not ActionExecution and not isinstance(msg, ActionExecution))
+            or msg.type is not _REQUEST
+            or not self._running
+        ):
+            return
         # The cheap refusals come first, read off the message: a busy performer, or
         # one whose specialised arguments do not fit, builds nothing. The goal itself
         # is shared by every performer handed the same REQUEST (goal_of).
@@ -335,7 +344,7 @@ class ActionPerformer(ABC):
         except Exception:
             log.exception("performer %s: bid/accepts for %s raised", self.node_name, goal.full_name)
             return
-        if cost is not None and (cost != cost or cost == math.inf):  # NaN or inf
+        if cost is not None and (cost != cost or cost == _INF):  # NaN or inf
             return
         self._committed = goal
         self._committed_bid = cost
@@ -343,7 +352,7 @@ class ActionPerformer(ABC):
         self._commit_deadline = loop.time() + self.commit_timeout
         # _respond, inlined: every bidder of every auction comes by
         self._out(
-            Topics.ACTIONS_HUB,
+            _ACTIONS_HUB,
             action_execution(
                 _RESPONSE,
                 self.node_name,
@@ -361,11 +370,11 @@ class ActionPerformer(ABC):
         goal = self.committed
         if goal is None or not same_goal(goal, msg):
             return  # not (or no longer) committed to this request
-        self._release_commitment()
+        self._committed = None  # _release_commitment, inlined
         self.goal = goal
         self.completion = 0.0
         self.executed += 1
-        self.state = PerformerState.RUNNING
+        self.state = _RUNNING
         self._cancelling = False
         self._task = asyncio.get_running_loop().create_task(
             self._run_goal(goal), name=f"{self.node_name}:{goal.full_name}"
@@ -403,7 +412,7 @@ class ActionPerformer(ABC):
             self.goal = None
             self._cancelling = False
             if self._running:
-                self.state = PerformerState.READY
+                self.state = _READY
                 self._publish_status()
 
     async def _after_cancel(self, goal: ActionGoal) -> None:
@@ -429,7 +438,7 @@ class ActionPerformer(ABC):
         bid: float | None = None,
     ) -> None:
         self._out(
-            Topics.ACTIONS_HUB,
+            _ACTIONS_HUB,
             action_execution(
                 kind,
                 self.node_name,
@@ -447,11 +456,17 @@ class ActionPerformer(ABC):
         """Every message the performer sends goes through here (fault injection hooks it)."""
         self.hub.publish(topic, msg)
 
+    def _publish_each(self, topic: str, messages: Sequence[object]) -> None:
+        for msg in messages:
+            self._publish(topic, msg)
+
     def _publish_status(self) -> None:
-        stamp = self.clock.now()
-        out, state, node = self._out, self.state, self.node_name
-        for action, spec in self.actions.items():
-            out(Topics.PERFORMERS_STATUS, performer_status(stamp, state, action, spec, node))
+        # One status per action served, published together (same messages, same
+        # order): a change of state costs one publish, not one per action.
+        self._out_many(
+            _STATUS,
+            performer_statuses(self.clock.now(), self.state, self.actions.items(), self.node_name),
+        )
 
     def _heartbeat(self) -> None:
         # A timer callback rather than a task: heartbeats are most of the traffic of
@@ -464,19 +479,6 @@ class ActionPerformer(ABC):
         )
 
     # ------------------------------------------------------------------ configuration
-
-    @classmethod
-    def parse_config(cls, config: Mapping[str, Any], *, key: str = "performer") -> PerformerConfig:
-        """Check a mission file's performer entry: the common keys, then the kind's
-        ``Settings`` (or, for a kind written before those, its ``settings_keys``)."""
-        return parse_entry(cls, config, key=key)
-
-    @classmethod
-    def prepare(cls, entry: PerformerConfig, context: PerformerContext) -> PerformerConfig:
-        """Optional: checks and loading that need the context (files next to the
-        mission, the knowledge) after the settings were validated; returns the entry
-        with what changed (``dataclasses.replace(entry, settings=...)``)."""
-        return entry
 
     @classmethod
     def from_config(
