@@ -79,7 +79,8 @@ class ActionClient(DrivenFuture[ActionOutcome]):
 
     ``await run()`` returns an :class:`ActionOutcome` (it never raises for a failed
     action); ``cancel()`` stops it from outside, and so does cancelling the task that
-    awaits ``run()``. Either way the confirmed performer receives a CANCEL.
+    awaits ``run()`` or the future ``start()`` returns. Either way the confirmed
+    performer receives a CANCEL.
     """
 
     # Defaults read from the class until a client sets its own (immutable values):
