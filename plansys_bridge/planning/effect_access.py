@@ -10,7 +10,7 @@ here as its lowered form without an edit.
 
 from __future__ import annotations
 
-from collections.abc import Container, Iterator, Mapping
+from collections.abc import Container, Iterable, Iterator, Mapping
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
 from typing import TypeAlias
@@ -49,6 +49,7 @@ __all__ = [
     "condition_vars",
     "effect_access",
     "expr_fluents",
+    "fixed_condition_vars",
     "ground_fluent",
     "numeric_class",
     "reads_fixed",
@@ -199,6 +200,78 @@ def condition_vars(
     return out
 
 
+def fixed_condition_vars(cond: Condition) -> set[Var] | None:
+    """:func:`condition_vars` of a ground condition :func:`reads_fixed` accepts,
+    read off its structure: the same set, built in the same order (atoms in the
+    order the evaluator's walk meets them, positive then negative, then fluents),
+    so that it also iterates the same way. None when an argument is a variable
+    (the evaluator's walk names it).
+
+    Why: a plan has a few conditions per ground action, and the evaluator's walk
+    sets up an evaluation context for each; these need none.
+    """
+    if type(cond) is And and not cond.operands:
+        return set()
+    pos: set[Atom] = set()
+    neg: set[Atom] = set()
+    fluents: set[FluentKey] = set()
+    stack: list[tuple[Condition, bool]] = [(cond, True)]
+    while stack:
+        node, positive = stack.pop()
+        kind = type(node)
+        if kind is Atom:
+            args = node.args  # type: ignore[union-attr]
+            if type(args) is not tuple or any(a[:1] == "?" for a in args):
+                return None
+            (pos if positive else neg).add(Atom(node.predicate, args))  # type: ignore[union-attr]
+        elif kind is And:
+            stack += [(c, positive) for c in reversed(node.operands)]  # type: ignore[union-attr]
+        elif kind is Not:
+            stack.append((node.operand, not positive))  # type: ignore[union-attr]
+        elif kind is Compare:
+            for n in iter_nodes(node):
+                if type(n) is FluentRef:
+                    if type(n.args) is not tuple or any(a[:1] == "?" for a in n.args):
+                        return None
+                    fluents.add((n.name, n.args))
+        elif kind is not Equals:
+            return None
+    out: set[Var] = {("a", atom) for atom in pos | neg}
+    out |= {("f", key) for key in fluents}
+    return out
+
+
+def _fixed_effect_parts(
+    effect: Effect,
+) -> tuple[set[Atom], set[Atom], set[FluentKey], list[NumericEffect]] | None:
+    """``Evaluator.effect_atoms`` of an effect :func:`writes_fixed` accepts (adds,
+    deletes, numeric fluents, each set built in the evaluator's order) and its
+    numeric leaves in order; None when an argument is a variable."""
+    adds: set[Atom] = set()
+    deletes: set[Atom] = set()
+    fluents: set[FluentKey] = set()
+    numeric: list[NumericEffect] = []
+    stack: list[Effect] = [effect]
+    while stack:
+        node = stack.pop()
+        kind = type(node)
+        if kind is AndEffect:
+            stack += reversed(node.effects)  # type: ignore[union-attr]
+            continue
+        if kind is NumericEffect:
+            ref: FluentRef = node.fluent  # type: ignore[union-attr]
+            if type(ref.args) is not tuple or any(a[:1] == "?" for a in ref.args):
+                return None
+            fluents.add((ref.name, ref.args))
+            numeric.append(node)  # type: ignore[arg-type]
+            continue
+        atom: Atom = node.atom  # type: ignore[union-attr]
+        if type(atom.args) is not tuple or any(a[:1] == "?" for a in atom.args):
+            return None
+        (adds if kind is AddEffect else deletes).add(Atom(atom.predicate, atom.args))
+    return adds, deletes, fluents, numeric
+
+
 @dataclass(frozen=True)
 class EffectAccess:
     """What one ground effect reads and writes (see :func:`effect_access`)."""
@@ -219,10 +292,16 @@ def effect_access(ev: Evaluator, effect: Effect, state: State, fixed: bool = Fal
     conditional effects and the values of its numeric effects are reads; deletes
     that it also adds count as adds. ``fixed``: the caller knows the effect does
     the same in every state (:func:`writes_fixed`)."""
-    adds, deletes, numeric = ev.effect_atoms(effect, GROUND, state)
+    parts = _fixed_effect_parts(effect) if fixed else None
+    if parts is not None:  # no evaluation context needed
+        adds, deletes, numeric, leaves = parts
+        walked: Iterable[tuple[Effect, Mapping[str, str]]] = [(e, GROUND) for e in leaves]
+    else:
+        adds, deletes, numeric = ev.effect_atoms(effect, GROUND, state)
+        walked = walk_effect(effect, GROUND, ev, state)
     read: set[Var] = set()
     ops: dict[FluentKey, str] = {}
-    for sub, binds in walk_effect(effect, GROUND, ev, state):
+    for sub, binds in walked:
         if isinstance(sub, WhenEffect):
             read |= condition_vars(ev, sub.condition, binds, state)
         elif isinstance(sub, NumericEffect):

@@ -29,6 +29,7 @@ from plansys_bridge.planning.effect_access import (
     Var,
     condition_vars,
     effect_access,
+    fixed_condition_vars,
     reads_fixed,
     writes_fixed,
     written_names,
@@ -278,8 +279,12 @@ class GraphBuilder:
     def _reads(self, cond: Condition, state: State, m: _Moves, part: str) -> tuple[VarHistory, ...]:
         """The histories ``cond`` reads in ``state``, kept in ``m`` (with the
         over-all ones worth watching) when they are the same in every state."""
-        found = tuple(map(self._history, condition_vars(self.ev, cond, GROUND, state)))
-        if reads_fixed(cond, self._derived):
+        fixed = reads_fixed(cond, self._derived)
+        listed = fixed_condition_vars(cond) if fixed else None
+        if listed is None:
+            listed = condition_vars(self.ev, cond, GROUND, state)
+        found = tuple(map(self._history, listed))
+        if fixed:
             setattr(m, part, found)
             if part == "over":
                 m.watched = self._watched(found)

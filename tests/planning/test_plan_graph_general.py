@@ -238,3 +238,39 @@ def test_the_random_plans_meet_every_case() -> None:
     assert ("at start", False) in whens  # go leaves from where no robot is
     with general_way():
         assert build_plan_graph(plan, DOMAIN, k.state()).orderings == graph.orderings
+
+
+def test_fixed_accesses_read_off_the_structure_equal_the_evaluators() -> None:
+    """Same sets in the same iteration order (which picks an ordering's subject
+    when two variables order the same pair of happenings)."""
+    from plansys_bridge.planning.effect_access import (
+        fixed_condition_vars,
+        reads_fixed,
+        writes_fixed,
+    )
+
+    k = _knowledge()
+    state = k.state()
+    ev = Evaluator(DOMAIN)
+    seen = 0
+    for name, arity in ARITY.items():
+        for args in [(a,) for a in SPOTS] if arity == 1 else [(a, b) for a in SPOTS for b in SPOTS]:
+            g = ev.ground_action(name, args, state)
+            for cond in (g.at_start, g.over_all, g.at_end):
+                if reads_fixed(cond, ev._derived_rules):
+                    fast = fixed_condition_vars(cond)
+                    assert fast is not None
+                    general = condition_vars(ev, cond, GROUND, state)
+                    assert fast == general and list(fast) == list(general)
+                    seen += 1
+            for effect in (g.start_effect, g.end_effect):
+                if writes_fixed(effect):
+                    fast_access = effect_access(ev, effect, state, True)
+                    general_access = effect_access(ev, effect, state)
+                    assert list(fast_access.adds) == list(general_access.adds)
+                    assert list(fast_access.deleted) == list(general_access.deleted)
+                    assert fast_access.read == general_access.read
+                    assert fast_access.writes == general_access.writes
+                    assert list(fast_access.written) == list(general_access.written)
+                    seen += 1
+    assert seen > 30
