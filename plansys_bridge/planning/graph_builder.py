@@ -127,21 +127,20 @@ class GraphBuilder:
     def ground(self) -> tuple[tuple[GroundAction, ...], list[_Moves]]:
         """Every step's ground action and its (shared) moves; an unknown action or a
         wrong argument list raises :class:`ExecutionError` naming the step."""
-        out: list[GroundAction] = []
-        moves: list[_Moves] = []
         actions = {a.name: a for a in self.domain.actions}
         # plans repeat actions (a robot going back and forth): ground each once, all
         # in the same initial state, and share the (frozen) result
         seen: dict[tuple[str, tuple[str, ...]], tuple[GroundAction, _Moves]] = {}
         changeable = self._changeable
         named: set[str] = set()  # grounding only substitutes arguments: names stay
-        for i, step in enumerate(self.steps):
-            key = (step.action, step.arguments)
+        keys = [
+            (s.action, s.arguments if type(s.arguments) is tuple else tuple(s.arguments))
+            for s in self.steps
+        ]
+        for i, key in enumerate(keys):
             if key in seen:
-                g, m = seen[key]
-                out.append(g)
-                moves.append(m)
                 continue
+            step = self.steps[i]
             action = actions.get(step.action)
             if action is None:
                 raise ExecutionError(
@@ -157,17 +156,15 @@ class GraphBuilder:
                 g = self.ev.ground_action(action, step.arguments, self.initial)
             except Exception as exc:  # the evaluator's own error names the cause
                 raise ExecutionError(f"plan step {i} {step.text}: {exc}") from exc
-            m = _Moves(g)
-            seen[key] = (g, m)
-            out.append(g)
-            moves.append(m)
+            seen[key] = (g, _Moves(g))
             if changeable is not None and step.action not in named:
                 named.add(step.action)
                 for effect in (g.start_effect, g.end_effect):
                     names = written_names(effect) if changeable is not None else None
                     changeable = None if names is None else changeable | names  # type: ignore[operator]
         self._changeable = changeable
-        return tuple(out), moves
+        found = [seen[key] for key in keys]
+        return tuple([g for g, _ in found]), [m for _, m in found]
 
     # ------------------------------------------------------------ simulating
 
