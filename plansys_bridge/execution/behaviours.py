@@ -19,6 +19,7 @@ import asyncio
 import py_trees
 from py_trees.common import Status
 
+from plansys_bridge.execution.effect_delta import EffectDelta
 from plansys_bridge.execution.phases import (
     AtEndEffectPhase,
     AtEndReqPhase,
@@ -30,7 +31,7 @@ from plansys_bridge.execution.phases import (
     Phase,
     PredecessorsPhase,
 )
-from plansys_bridge.execution.plan_context import ActionRuntime, EffectDelta, PlanContext
+from plansys_bridge.execution.plan_context import ActionRuntime, PlanContext
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome
 from plansys_bridge.planning.orderings import START, Point
 

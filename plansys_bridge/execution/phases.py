@@ -28,7 +28,13 @@ from functools import partial
 from py_trees.common import Status
 
 from plansys_bridge.errors import PlansysBridgeError
-from plansys_bridge.execution.plan_context import ActionRuntime, EffectDelta, PlanContext
+from plansys_bridge.execution.effect_delta import EffectDelta
+from plansys_bridge.execution.plan_context import ActionRuntime, PlanContext
+from plansys_bridge.execution.waits import (
+    at_start_deadline,
+    wait_at_start_req,
+    wait_for_predecessors,
+)
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome
 from plansys_bridge.pddl.model import Condition
 from plansys_bridge.planning.orderings import GROUND, START, Point
@@ -107,27 +113,10 @@ class PredecessorsPhase(Phase):
         self._next = 0
 
     def step(self) -> Status:
-        ctx = self.ctx
-        if self.point == START and (ctx.draining or ctx.cancelled):
-            self.rt.skipped = True
-            return self.fail(
-                "not started: the plan stopped after "
-                + (ctx.failures[0] if ctx.failures else "a cancel")
-            )
-        waits = self.waits
-        for n in range(self._next, len(waits)):
-            j, point = waits[n]
-            if not ctx.reached(j, point):
-                self._next = n
-                other = ctx.actions[j]
-                if other.finished:
-                    if self.point == START:
-                        self.rt.skipped = True
-                    return self.fail(f"predecessor {other.text} stopped before its {point}")
-                ctx.park(self.rt.index)
-                return Status.RUNNING
-        self._next = len(waits)
-        return Status.SUCCESS
+        status, self._next = wait_for_predecessors(
+            self.ctx, self.rt, self.point, self.waits, self._next
+        )
+        return status
 
 
 class AtStartReqPhase(Phase):
@@ -142,21 +131,10 @@ class AtStartReqPhase(Phase):
         self.deadline: float | None = None
 
     def initialise(self) -> None:
-        if self.timeout is not None:
-            self.deadline = self.ctx.now() + self.timeout
-            self.ctx.schedule(self.deadline, self.rt.index)
+        self.deadline = at_start_deadline(self.ctx, self.rt, self.timeout)
 
     def step(self) -> Status:
-        ctx = self.ctx
-        if ctx.draining or ctx.cancelled:
-            self.rt.skipped = True
-            return self.fail("not started: the plan is stopping")
-        if ctx.holds(self.rt, self.rt.ground.at_start):
-            return Status.SUCCESS
-        if self.deadline is not None and ctx.now() >= self.deadline:
-            unmet = ctx.unmet(self.rt, self.rt.ground.at_start)
-            return self.fail(f"at start requirement {unmet} did not hold within {self.timeout:g} s")
-        return Status.RUNNING
+        return wait_at_start_req(self.ctx, self.rt, self.deadline, self.timeout)
 
 
 class AtStartEffectPhase(Phase):
@@ -235,7 +213,7 @@ class ExecutePhase(Phase):
         )
         # tracked as PlanContext.track does, with one done callback instead of two:
         # the loop then schedules one call, not two, when the execution ends
-        ctx.tasks.add(future)  # type: ignore[arg-type]  # cancelled/gathered like a task
+        ctx.tasks.add(future)
         future.add_done_callback(self._ended)
 
     def _ended(self, future: asyncio.Future[ActionOutcome]) -> None:

@@ -3,8 +3,9 @@
 Each action has an :class:`ActionRuntime` (which of its happenings took place, its
 record, why it stopped); the :class:`PlanContext` holds them all with the hub, the
 knowledge and the options, keeps the records, publishes ``ActionExecutionInfo``
-and decides which branches are worth ticking. :class:`EffectDelta` remembers what
-an at-start effect changed so a halted action can be undone safely.
+and decides which branches are worth ticking. :class:`EffectDelta` (what an
+at-start effect changed, so a halted action can be undone) lives in
+:mod:`plansys_bridge.execution.effect_delta` and is re-exported here.
 """
 
 from __future__ import annotations
@@ -13,19 +14,20 @@ import asyncio
 import heapq
 import logging
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from plansys_bridge.errors import PlansysBridgeError
+from plansys_bridge.execution.effect_delta import EffectDelta
 from plansys_bridge.execution.options import ExecutorOptions
 from plansys_bridge.execution.results import ActionRecord
 from plansys_bridge.hub.auction import ActionClient, ActionOutcome
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.messages import ActionExecutionInfo, ActionStatus, Topics, execution_info
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
-from plansys_bridge.knowledge.state import FluentKey, State
-from plansys_bridge.pddl.model import Atom, Condition, Effect, FluentRef, FluentValue
+from plansys_bridge.knowledge.state import State
+from plansys_bridge.pddl.model import Atom, Condition, FluentRef
 from plansys_bridge.pddl.walkers import Collector
 from plansys_bridge.planning.orderings import END, GROUND, START, Point
 from plansys_bridge.planning.plan import PlanStep
@@ -38,64 +40,6 @@ if TYPE_CHECKING:
 __all__ = ["ActionRuntime", "EffectDelta", "PlanContext"]
 
 log = logging.getLogger(__name__)
-
-
-@dataclass
-class EffectDelta:
-    """What applying an effect actually changed, so it can be undone safely."""
-
-    added: tuple[Atom, ...] = ()
-    deleted: tuple[Atom, ...] = ()
-    fluents: tuple[tuple[FluentKey, float | None, float], ...] = ()
-    """(key, old value or None, new value)."""
-
-    @classmethod
-    def of(
-        cls,
-        evaluator: Evaluator,
-        effect: Effect,
-        state: State,
-        bindings: Mapping[str, str],
-        duration: float | None,
-    ) -> EffectDelta:
-        """What ``effect`` changes in ``state``; the evaluator keeps its answer for
-        the knowledge's ``apply`` of the same effect on the same snapshot, which
-        usually follows at once (the effect is worked out once, not twice)."""
-        adds, deletes, updates = evaluator.changes(effect, state, bindings, duration, keep=True)
-        if not (adds or deletes or updates):
-            return cls()
-        add_set = set(adds)
-        return cls(
-            added=tuple([a for a in add_set if a not in state]) if adds else (),
-            deleted=tuple([d for d in set(deletes) - add_set if d in state]) if deletes else (),
-            fluents=tuple(
-                [(k, state.value(*k), v) for k, v in updates.items() if state.value(*k) != v]
-            )
-            if updates
-            else (),
-        )
-
-    @property
-    def empty(self) -> bool:
-        return not (self.added or self.deleted or self.fluents)
-
-    def undo(self, knowledge: ProblemExpert) -> None:
-        """Revert each change that is still in place, in one knowledge transaction."""
-        state = knowledge.state()
-        with knowledge.transaction():
-            for atom in self.added:
-                if atom in state:
-                    knowledge.remove_predicate(atom)
-            for atom in self.deleted:
-                if atom not in state:
-                    knowledge.add_predicate(atom)
-            for (name, args), old, new in self.fluents:
-                if state.value(name, args) != new:
-                    continue
-                if old is None:
-                    knowledge.remove_function(name, args)
-                else:
-                    knowledge.set_function(FluentValue(FluentRef(name, args), old))
 
 
 class _Reads(Collector):
@@ -197,7 +141,9 @@ class PlanContext:
         """Set whenever an action moves on; the executor ticks again while it is set."""
         self.changed = False
         """Set when a status changed since the last DOT publication."""
-        self.tasks: set[asyncio.Task[Any]] = set()
+        self.tasks: set[asyncio.Future[Any]] = set()
+        """What runs for the plan (auction clients' outcome futures, tasks): the
+        executor cancels and awaits them when the plan ends."""
         self.dependents: list[set[int]] = [set() for _ in self.actions]
         """For each action, the actions with a start or end wait on it."""
         for i in range(len(self.actions)):
@@ -494,6 +440,6 @@ class PlanContext:
         except PlansysBridgeError as exc:
             rt.record.message += f" (its at-start effects could not be undone: {exc})"
 
-    def track(self, task: asyncio.Task[Any]) -> None:
+    def track(self, task: asyncio.Future[Any]) -> None:
         self.tasks.add(task)
         task.add_done_callback(self.tasks.discard)
