@@ -22,7 +22,7 @@ from plansys_bridge.knowledge.journal import JournaledTable
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import Atom, Condition
 
-__all__ = ["ChangeTracker", "KnowledgeChange"]
+__all__ = ["AppliedEffect", "ChangeTracker", "KnowledgeChange", "applied_effect"]
 
 log = logging.getLogger("plansys_bridge.knowledge.problem_expert")
 
@@ -56,6 +56,29 @@ class KnowledgeChange:
         change = object.__new__(cls)
         change.__dict__.update(fields)
         return change
+
+
+class AppliedEffect(NamedTuple):
+    """What applying one effect changed, net, so that it can be undone: the facts it
+    made true, the facts it made false and each fluent it changed with its old value
+    (None: it had none) and its new one."""
+
+    added: tuple[Atom, ...]
+    deleted: tuple[Atom, ...]
+    fluents: tuple[tuple[FluentKey, float | None, float], ...]
+
+
+def applied_effect(
+    state: State, adds: list[Atom], deletes: list[Atom], updates: Mapping[FluentKey, float]
+) -> AppliedEffect:
+    """What applying ``adds``, ``deletes`` and ``updates`` to ``state`` changes, net:
+    a fact deleted and added again stays, a fluent set to its value is unchanged."""
+    add_set = set(adds)
+    return AppliedEffect(
+        tuple(dict.fromkeys([a for a in adds if a not in state])),
+        tuple(dict.fromkeys([d for d in deletes if d not in add_set and d in state])),
+        tuple([(k, state.value(*k), v) for k, v in updates.items() if state.value(*k) != v]),
+    )
 
 
 class _Mark(NamedTuple):
@@ -160,7 +183,9 @@ class ChangeTracker:
             state=self._state,
         )
 
-    def _replace_facts(self, deletes: list[Atom], adds: list[Atom], reason: str) -> None:
+    def _replace_facts(
+        self, deletes: list[Atom], adds: list[Atom], reason: str
+    ) -> tuple[dict[Atom, None], dict[Atom, None]]:
         """Delete then add facts (admitted already) as one change of its own, outside
         any transaction (the lock held).
 
@@ -170,7 +195,8 @@ class ChangeTracker:
         writes report instead of a scan of three logs afterwards. The notice's sets
         are built from dicts in the order the scan finds them, as the scan does (a
         frozenset built from a dict is sized for it at once, so its iteration order
-        differs from one built from a list).
+        differs from one built from a list). Returns the facts that went and the
+        facts that came, net, in the effect's order.
         """
         state = self._state.with_facts(deletes, adds)  # touches nothing
         removed, added = self._facts.swap(deletes, adds, None)  # all or nothing
@@ -181,7 +207,7 @@ class ChangeTracker:
                 removed = {k: None for k in removed if k not in again}
                 added = {k: None for k in added if k not in again}
         if not (added or removed):
-            return
+            return removed, added
         self.version += 1
         # KnowledgeChange._made, inlined (two of these per executed action)
         change = object.__new__(KnowledgeChange)
@@ -199,6 +225,7 @@ class ChangeTracker:
             state=state,
         )
         self._notify(change)
+        return removed, added
 
     def _notify(self, change: KnowledgeChange) -> None:
         for callback in list(self._subscribers):

@@ -23,7 +23,12 @@ from collections.abc import Mapping, Sequence
 from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.hub.messages import Knowledge
 from plansys_bridge.knowledge.admission import Admission
-from plansys_bridge.knowledge.changes import ChangeTracker, KnowledgeChange
+from plansys_bridge.knowledge.changes import (
+    AppliedEffect,
+    ChangeTracker,
+    KnowledgeChange,
+    applied_effect,
+)
 from plansys_bridge.knowledge.domain_expert import DomainExpert
 from plansys_bridge.knowledge.evaluation import Evaluator
 from plansys_bridge.knowledge.inputs import (
@@ -46,7 +51,7 @@ from plansys_bridge.pddl.model import (
 )
 from plansys_bridge.pddl.walkers import iter_nodes, terms
 
-__all__ = ["KnowledgeChange", "ProblemExpert"]
+__all__ = ["AppliedEffect", "KnowledgeChange", "ProblemExpert"]
 
 
 _NAME = re.compile(r"^[a-z][a-z0-9_\-]*$")
@@ -410,8 +415,11 @@ class ProblemExpert(ChangeTracker):
         effect: Effect,
         bindings: Mapping[str, str] | None = None,
         duration: float | None = None,
-    ) -> None:
-        """Apply an effect (PDDL semantics) as one validated, atomic change.
+    ) -> AppliedEffect:
+        """Apply an effect (PDDL semantics) as one validated, atomic change, and
+        say what it changed: the executor keeps that to undo an at-start effect
+        when the action is halted (worked out here, where it is known anyway,
+        instead of from a snapshot read before).
 
         What the effect does is worked out by the evaluator, which hands over what
         it found for the same effect and snapshot a moment ago (the executor works
@@ -437,8 +445,8 @@ class ProblemExpert(ChangeTracker):
                     pass
                 else:
                     if known[0] is effect and not self._depth:
-                        self._replace_facts(known[1], known[2], "apply")
-                        return
+                        removed, added = self._replace_facts(known[1], known[2], "apply")
+                        return tuple.__new__(AppliedEffect, (tuple(added), tuple(removed), ()))
                 plain = self.evaluator.plain_changes(effect)
             adds: Sequence[Atom]
             deletes: Sequence[Atom]
@@ -455,8 +463,9 @@ class ProblemExpert(ChangeTracker):
             if not updates and not self._depth:
                 if plain is not None and len(self._applied) < _APPLIED_LIMIT:
                     self._applied[id(effect)] = (effect, checked_deletes, checked_adds)
-                self._replace_facts(checked_deletes, checked_adds, "apply")
-                return
+                removed, added = self._replace_facts(checked_deletes, checked_adds, "apply")
+                return tuple.__new__(AppliedEffect, (tuple(added), tuple(removed), ()))
+            applied = applied_effect(self._state, checked_adds, checked_deletes, updates)
             with self._change("apply"):
                 self._facts.discard_many(checked_deletes)
                 self._facts.set_many(checked_adds, None)
@@ -465,6 +474,7 @@ class ProblemExpert(ChangeTracker):
                 self._state = self._state.with_changes(
                     adds=checked_adds, deletes=checked_deletes, fluents=updates
                 )
+            return applied
 
     # ================================================================ messages
 

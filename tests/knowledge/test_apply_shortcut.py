@@ -13,6 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from plansys_bridge.errors import KnowledgeError
+from plansys_bridge.execution.plan_context import EffectDelta
 from plansys_bridge.knowledge.changes import ChangeTracker, KnowledgeChange
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.knowledge.state import State
@@ -21,7 +22,6 @@ from plansys_bridge.pddl.model import (
     AndEffect,
     Atom,
     DeleteEffect,
-    Effect,
     FluentRef,
     Number,
     NumericEffect,
@@ -69,19 +69,43 @@ _EFFECTS = st.lists(st.tuples(st.booleans(), st.sampled_from(ATOMS)), max_size=8
 )
 
 
+_LEVELS = st.lists(
+    st.builds(
+        lambda op, x, v: NumericEffect(op, FluentRef("level", (x,)), Number(v)),
+        st.sampled_from(["assign", "increase"]),
+        st.just("a"),  # the one with a value (an increase of none fails either way)
+        st.sampled_from([0.0, 1.0, 2.0]),
+    ),
+    max_size=2,
+)
+
+
 @settings(max_examples=150, deadline=None)
 @given(
-    initial=st.lists(st.sampled_from(ATOMS), unique=True), effects=st.lists(_EFFECTS, max_size=3)
+    initial=st.lists(st.sampled_from(ATOMS), unique=True),
+    effects=st.lists(_EFFECTS, max_size=3),
+    levels=_LEVELS,
 )
 def test_the_short_way_leaves_what_the_general_way_leaves(
-    initial: list[Atom], effects: list[Effect]
+    initial: list[Atom], effects: list[AndEffect], levels: list[NumericEffect]
 ) -> None:
+    """The knowledge, the notices and what apply() says it changed, which is also
+    what the executor used to work out from the snapshot before (EffectDelta.of,
+    as sets: it listed them in a set's order)."""
     short, short_seen = _knowledge(initial)
     general, general_seen = _knowledge(initial)
-    for effect in effects:
-        short.apply(effect)
+    for i, effect in enumerate(effects):
+        if i == 1:  # fluents too (then the general way both sides)
+            effect = AndEffect((*effect.effects, *levels))
+        before = short.state()
+        delta = EffectDelta.of(short.evaluator, effect, before, {}, None)
+        applied = short.apply(effect)
         with general.transaction():
-            general.apply(effect)
+            assert general.apply(effect) == applied
+        assert set(applied.added) == set(delta.added) and len(applied.added) == len(delta.added)
+        assert set(applied.deleted) == set(delta.deleted)
+        assert len(applied.deleted) == len(delta.deleted) and applied.fluents == delta.fluents
+        assert short.state().facts == (before.facts - set(applied.deleted)) | set(applied.added)
     assert _observed(short, short_seen) == _observed(general, general_seen)
 
 
