@@ -119,6 +119,7 @@ class PlanGraph:
         self.final_state = final_state
         """The state the plan leads to, simulated from the knowledge it was built on."""
         self._links = links if orderings is None else None
+        pairs: Sequence[tuple[int, int]]
         if self._links is None:
             self.__dict__["orderings"] = tuple(orderings or ())
             pairs = [
@@ -126,7 +127,7 @@ class PlanGraph:
                 for o in self.orderings
             ]
         else:
-            pairs = list(self._links.pairs)
+            pairs = self._links.pairs
         self._start_waits, self._end_waits = waits_of(pairs, len(steps))
         self._order = (
             list(order)
