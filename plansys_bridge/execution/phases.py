@@ -149,10 +149,11 @@ class AtStartEffectPhase(Phase):
 def apply_at_start_effect(ctx: PlanContext, rt: ActionRuntime) -> Status:
     """:class:`AtStartEffectPhase`'s step, which keeps no state: the standard action
     calls it without making a phase object."""
-    effect = rt.ground.start_effect
-    rt.start_delta = EffectDelta.of(ctx.evaluator, effect, ctx.state(), GROUND, rt.step.duration)
-    if not rt.start_delta.empty:
-        ctx.knowledge.apply(effect, GROUND, rt.step.duration)
+    # apply() says what the effect changed, net, worked out under the same lock as
+    # the change: that is what a halt undoes (an effect that changes nothing
+    # changes neither the knowledge's version nor its subscribers)
+    applied = ctx.knowledge.apply(rt.ground.start_effect, GROUND, rt.step.duration)
+    rt.start_delta = EffectDelta(applied.added, applied.deleted, applied.fluents)
     ctx.action_started(rt)
     return Status.SUCCESS
 
