@@ -42,6 +42,8 @@ _TO_CLIENT = frozenset({ExecutionType.RESPONSE, ExecutionType.FEEDBACK, Executio
 # Reading an enum member off its class costs about 0.3 us on Python 3.11, more than
 # the rest of routing a message: the members used per message are read once here.
 _REQUEST = ExecutionType.REQUEST
+_TO_NODE = frozenset({ExecutionType.CONFIRM, ExecutionType.REJECT, ExecutionType.CANCEL})
+"""The kinds :func:`_action_route` routes by node (neither REQUEST nor to a client)."""
 
 
 def _action_route(msg: object) -> Hashable | None:
@@ -202,7 +204,7 @@ class TopicRouter:
         """By the REQUEST route key ``("action", name)``."""
         self._router = _ROUTERS.get(topic)
         self._order = count()
-        self.transport_subscription: Subscription | None = None
+        self._transport_subscription: Subscription | None = None
 
     def add(self, callback: Callback, keys: Iterable[Hashable] | None) -> Subscription:
         key_tuple = None if keys is None else tuple(dict.fromkeys(keys))
@@ -228,7 +230,6 @@ class TopicRouter:
                 self._keyed[key] = [*self._keyed.get(key, ()), sub]
                 sub.routes.append(key)
         self._all_keyed[sub] = None
-        self._rewire()
         return sub
 
     def _remove(self, sub: _RoutedSubscription) -> None:
@@ -252,21 +253,29 @@ class TopicRouter:
                 self._specialised_subs.pop(route, None)
                 self._specialised.pop(route, None)
         self._all_keyed.pop(sub, None)
+
+    @property
+    def transport_subscription(self) -> Subscription | None:
+        """The transport's subscription feeding this router (set by the hub)."""
+        return self._transport_subscription
+
+    @transport_subscription.setter
+    def transport_subscription(self, sub: Subscription | None) -> None:
+        self._transport_subscription = sub
+        if sub is not None and self._router is not None:
+            redirect(sub, self.dispatch, self.dispatch_many)  # batches in one call
         self._rewire()
 
     def _rewire(self) -> None:
-        """Where the transport delivers: on a topic without routes and with one
-        subscriber, to that subscriber itself (a call less per message: a performer's
-        statuses reach the liveness table so); else to :meth:`dispatch`. Closing the
-        subscriber rewires before anything else is delivered."""
-        sub = self.transport_subscription
-        if sub is None:
-            return
+        """Where the transport delivers on a topic without routes: with one subscriber,
+        to that subscriber itself (a call less per message: a performer's statuses
+        reach the liveness table so); else to :meth:`dispatch`. Closing the subscriber
+        rewires before anything else is delivered."""
+        sub = self._transport_subscription
+        if sub is None or self._router is not None:
+            return  # a routed topic: always dispatch (keyed subscribers never rewire)
         everyone = self._everyone
-        if self._router is None and len(everyone) == 1 and not self._all_keyed:
-            redirect(sub, everyone[0].callback)
-        else:
-            redirect(sub, self.dispatch)
+        redirect(sub, everyone[0].callback if len(everyone) == 1 else self.dispatch)
 
     def __len__(self) -> int:
         return len(self._everyone) + len(self._all_keyed)
@@ -335,13 +344,36 @@ class TopicRouter:
             except Exception as exc:
                 report_subscriber_error(_running_loop(), self.topic, exc)
 
+    def dispatch_many(self, messages: Sequence[object]) -> None:
+        """:meth:`dispatch` for each of ``messages``, in order (a ``publish_many``
+        batch). A message naming one node (the REJECTs that end an auction among N
+        bidders) goes straight to that node's subscribers while nobody takes every
+        message: one call for the batch instead of one per message."""
+        for msg in messages:
+            if (
+                self._everyone
+                or self._router is not _action_route
+                or msg.__class__ is not ActionExecution
+                or msg.type not in _TO_NODE
+            ):
+                self.dispatch(msg)
+                continue
+            # dispatch's delivery loop, inlined: a call less per message of the batch
+            for sub in self._keyed.get(("node", msg.node_id), ()):
+                if sub.closed:
+                    continue
+                try:
+                    sub.callback(msg)
+                except Exception as exc:
+                    report_subscriber_error(_running_loop(), self.topic, exc)
+
     def close(self) -> None:
         for sub in (*self._everyone, *self._all_keyed):
             sub.closed = True
         self._everyone, self._keyed, self._all_keyed = [], {}, {}
         self._specialised_subs, self._specialised = {}, {}
-        if self.transport_subscription is not None:
-            self.transport_subscription.close()
+        if self._transport_subscription is not None:
+            self._transport_subscription.close()
 
 
 def _running_loop() -> Any:

@@ -58,13 +58,17 @@ class Transport(Protocol):
 
 
 class _InProcessSubscription:
-    __slots__ = ("callback", "closed", "topic", "transport")
+    __slots__ = ("batches", "callback", "closed", "many", "topic", "transport")
 
     def __init__(self, transport: InProcessTransport, topic: str, callback: Callback) -> None:
         self.transport = transport
         self.topic = topic
         self.callback = callback
         self.closed = False
+        self.many: Callable[[Sequence[object]], None] | None = None
+        """Takes a batch of ``publish_many`` in one call (see :func:`redirect`)."""
+        self.batches: list[_Batches] | None = None
+        """``[_Batches(self)]`` while ``many`` is set: the subscribers of a batch."""
 
     def close(self) -> None:
         if not self.closed:
@@ -74,6 +78,29 @@ class _InProcessSubscription:
     def __repr__(self) -> str:
         state = "closed" if self.closed else "open"
         return f"<Subscription {self.topic!r} {state}>"
+
+
+class _Batches:
+    """A subscription as the drain sees it for a batch: ``callback(messages)`` is its
+    ``many``, and it is closed when the subscription is."""
+
+    __slots__ = ("sub",)
+
+    def __init__(self, sub: _InProcessSubscription) -> None:
+        self.sub = sub
+
+    @property
+    def closed(self) -> bool:
+        return self.sub.closed
+
+    def callback(self, messages: object) -> None:
+        sub = self.sub
+        assert isinstance(messages, list)
+        if sub.many is not None:
+            sub.many(messages)
+        else:  # redirected meanwhile: one by one
+            for msg in messages:
+                sub.transport._deliver(sub.topic, [sub], msg)
 
 
 class InProcessTransport:
@@ -91,7 +118,7 @@ class InProcessTransport:
         self._loop: asyncio.AbstractEventLoop | None = None
         self._loop_thread: int | None = None
         self._closed = False
-        self._pending: list[tuple[str, list[_InProcessSubscription], object]] = []
+        self._pending: list[tuple[str, list[_InProcessSubscription] | list[_Batches], object]] = []
         self.published = 0
         """Messages published so far (all topics), for statistics."""
 
@@ -193,7 +220,12 @@ class InProcessTransport:
         if not pending:
             loop.call_soon(self._drain)
         self.published += len(messages)
-        pending.extend(zip(repeat(topic), repeat(subs), messages))
+        batches = subs[0].batches if len(subs) == 1 else None
+        if batches is not None:
+            # one subscriber that takes batches (a hub's router): one entry, one call
+            pending.append((topic, batches, list(messages)))
+        else:
+            pending.extend(zip(repeat(topic), repeat(subs), messages))
 
     def publish_batch(self, messages: list[tuple[str, object]]) -> None:
         """Publish ``(topic, msg)`` pairs in order, from any thread.
@@ -243,14 +275,22 @@ class InProcessTransport:
                 report_subscriber_error(self._loop, topic, exc)
 
 
-def redirect(subscription: Subscription, callback: Callback) -> bool:
+def redirect(
+    subscription: Subscription,
+    callback: Callback,
+    many: Callable[[Sequence[object]], None] | None = None,
+) -> bool:
     """Hand what ``subscription`` receives to ``callback`` from now on, messages already
-    queued included, where the transport allows it (in-process: yes); False where not.
+    queued included, and with ``many`` the batches of ``publish_many`` to ``many`` in
+    one call each, where the transport allows it (in-process: yes); False where not.
 
     A hub's router for a topic it does not route, with a single subscriber, passes
-    that subscriber to the transport instead of being called for each message."""
+    that subscriber to the transport instead of being called for each message; a
+    routed topic's router takes the REJECTs that end an auction as one batch."""
     if isinstance(subscription, _InProcessSubscription) and not subscription.closed:
         subscription.callback = callback
+        subscription.many = many
+        subscription.batches = None if many is None else [_Batches(subscription)]
         return True
     return False
 

@@ -57,7 +57,7 @@ async def _deliveries(steps: list[tuple[str, int]]) -> list[Any]:
 def test_direct_delivery_equals_delivery_through_the_router(steps: list[tuple[str, int]]) -> None:
     direct = run(_deliveries(steps), VirtualClock())
     with pytest.MonkeyPatch.context() as m:
-        m.setattr(routing, "redirect", lambda sub, callback: False)  # always the router
+        m.setattr(routing, "redirect", lambda *_: False)  # always the router
         routed = run(_deliveries(steps), VirtualClock())
     assert direct == routed
 
