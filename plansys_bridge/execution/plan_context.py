@@ -155,6 +155,8 @@ class PlanContext:
         self.resting: set[int] = set()
         """Branches whose performer works and that nothing has touched since."""
         self._reads: dict[int, frozenset[str] | None] = {}
+        self._reads_of: dict[int, tuple[Condition, frozenset[str] | None]] = {}
+        self._derived: frozenset[str] | None = None
         self._readers: dict[str, set[int]] = {}
         """For each name some resting branch's over-all reads, those branches: a
         change then finds the branches it wakes by its names, whatever the number
@@ -310,12 +312,21 @@ class PlanContext:
     def _over_all_reads(self, rt: ActionRuntime) -> frozenset[str] | None:
         """Names the action's over-all requirement reads; None when that cannot be
         told from the condition (a derived predicate)."""
-        if rt.index not in self._reads:
-            derived = frozenset(d.head.name for d in self.evaluator.domain.derived)
-            walker = _Reads(derived)
-            walker.walk(rt.ground.over_all)
-            self._reads[rt.index] = None if walker.derived else frozenset(walker.names)
-        return self._reads[rt.index]
+        index = rt.index
+        if index not in self._reads:
+            # A plan repeats its ground actions: the names are worked out once per
+            # condition object (kept alive by the entry, so its id is not reused).
+            cond = rt.ground.over_all
+            known = self._reads_of.get(id(cond))
+            if known is None or known[0] is not cond:
+                if self._derived is None:
+                    self._derived = frozenset(d.head.name for d in self.evaluator.domain.derived)
+                walker = _Reads(self._derived)
+                walker.walk(cond)
+                known = (cond, None if walker.derived else frozenset(walker.names))
+                self._reads_of[id(cond)] = known
+            self._reads[index] = known[1]
+        return self._reads[index]
 
     def _moved(self, rt: ActionRuntime) -> None:
         # activate(), inlined: an action has a few dependents and moves three times
