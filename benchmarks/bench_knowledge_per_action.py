@@ -1,11 +1,12 @@
 """The knowledge's share of an executed action: the calls the executor makes into it.
 
 Per action the executor (execution/plan_context.py and execution/phases.py) asks
-whether a ground condition holds seven times (at start twice, over all three
-times, at end twice; here each on a snapshot read just before), works out the
-at-start effect's delta (``EffectDelta.of``) and applies the at-start and at-end
-effects, each notifying a subscriber. This replays exactly those calls along the
-ring plans of ``bench_graph.py`` (no hub, no tree, no clock), so what is measured
+whether a ground condition holds four times (at start once, over all twice: when
+the performer is confirmed and when it ends, at end once; each on the current
+snapshot) and applies the at-start and at-end effects, each notifying a subscriber
+(the at-start effect's delta, which a halt undoes, is what ``apply`` reports it
+changed). This replays exactly those calls along the ring plans of
+``bench_graph.py`` (no hub, no tree, no clock), so what is measured
 is the knowledge alone: CPU time per action (best of ``--repeat`` runs) and, with
 ``--calls``, the Python calls per action under cProfile (a figure that does not
 swing with the machine's speed). There is no peer to compare with.
@@ -25,7 +26,7 @@ import time
 
 from bench_graph import world
 
-from plansys_bridge.execution.plan_context import EffectDelta
+from plansys_bridge.execution.effect_delta import EffectDelta
 from plansys_bridge.knowledge.evaluation import GroundAction
 from plansys_bridge.knowledge.problem_expert import KnowledgeChange, ProblemExpert
 from plansys_bridge.planning.orderings import GROUND
@@ -52,14 +53,10 @@ def replay(knowledge: ProblemExpert, steps: list[tuple[GroundAction, float]]) ->
     notices: list[KnowledgeChange] = []
     knowledge.subscribe(notices.append)
     for ground, duration in steps:
-        for cond in (ground.at_start, ground.at_start):
-            ev.holds(cond, knowledge.state(), GROUND, duration)
-        delta = EffectDelta.of(ev, ground.start_effect, knowledge.state(), GROUND, duration)
-        if not delta.empty:
-            knowledge.apply(ground.start_effect, GROUND, duration)
-        for cond in (ground.over_all, ground.over_all, ground.over_all):
-            ev.holds(cond, knowledge.state(), GROUND, duration)
-        for cond in (ground.at_end, ground.at_end):
+        ev.holds(ground.at_start, knowledge.state(), GROUND, duration)
+        applied = knowledge.apply(ground.start_effect, GROUND, duration)
+        EffectDelta(applied.added, applied.deleted, applied.fluents)
+        for cond in (ground.over_all, ground.over_all, ground.at_end):
             ev.holds(cond, knowledge.state(), GROUND, duration)
         knowledge.apply(ground.end_effect, GROUND, duration)
     return len(notices)

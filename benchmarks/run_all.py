@@ -67,6 +67,12 @@ BENCHES = (
         "the executor's CPU per action with performers that cost nothing (virtual clock)",
     ),
     Bench(
+        "knowledge_per_action",
+        "bench_knowledge_per_action.py",
+        ("--repeat", "3", "--calls"),
+        "the knowledge's share of an executed action (the executor's calls replayed)",
+    ),
+    Bench(
         "validation_share",
         "bench_validation_share.py",
         ("--repeat", "10"),
@@ -86,6 +92,12 @@ BENCHES = (
     ),
     Bench("graph", "bench_graph.py", ("--sizes", "100", "1000", "--repeat", "1"), "graph + tree"),
     Bench("dds", "bench_dds.py", ("--n", "300", "--warmup", "50"), "DDS vs in-process round trip"),
+    Bench(
+        "dds_codec",
+        "bench_dds_codec.py",
+        ("--repeat", "5"),
+        "ActionExecution bytes per sample vs Cyclone DDS's own serialiser",
+    ),
     Bench(
         "parse",
         "bench_parse.py",
