@@ -287,6 +287,8 @@ class Executor:
             if self.options.publish_dot
             else None
         )
+        timer: asyncio.TimerHandle | None = None
+        armed_for: float | None = None
         try:
             last_dot = clock.now()
             if dot is not None:
@@ -309,15 +311,18 @@ class Executor:
                 if root.status != Status.RUNNING:
                     break
                 deadline = ctx.next_deadline()
-                handle = None
-                if deadline is not None:
-                    delay = max(0.0, (deadline - clock.now()) * clock.time_scale)
-                    handle = loop.call_later(delay, event.set)
-                try:
-                    await event.wait()
-                finally:
-                    if handle is not None:
-                        handle.cancel()
+                if deadline != armed_for or (timer is not None and timer.when() <= loop.time()):
+                    # The timer of the last wait serves this one when the earliest
+                    # deadline is still the same (most wake-ups are a performer's
+                    # message, not a deadline): no new timer and no cancel per wait.
+                    if timer is not None:
+                        timer.cancel()
+                        timer = None
+                    armed_for = deadline
+                    if deadline is not None:
+                        delay = max(0.0, (deadline - clock.now()) * clock.time_scale)
+                        timer = loop.call_later(delay, event.set)
+                await event.wait()
         except BaseException:
             # cancelled from outside, or a template's behaviour raised: stop every
             # performer of this plan before letting the exception through
@@ -327,6 +332,8 @@ class Executor:
                 task.cancel()
             raise
         finally:
+            if timer is not None:
+                timer.cancel()
             unsubscribe()
             ctx.bind_wake(lambda: None)
             if dot is not None and ctx.changed:

@@ -122,8 +122,24 @@ class StandardAction(Behaviour):
             elif step > _LAST:
                 return Status.SUCCESS  # every phase is over
             else:
+                # the waiting steps: predecessors of the start (0) or the end
+                # (_END_WAIT), the at-start requirement (1)
                 try:
-                    status = self._wait(step)
+                    if step == 1:
+                        if not self._entered:
+                            self._entered = True
+                            self._timeout = ctx.options.at_start_timeout_for(rt.step.action)
+                            self._deadline = waits.at_start_deadline(ctx, rt, self._timeout)
+                        status = waits.wait_at_start_req(ctx, rt, self._deadline, self._timeout)
+                    else:
+                        point = START if step == 0 else END
+                        if not self._entered:
+                            self._entered = True
+                            self._waits = ctx.graph.waits(rt.index, point)
+                            self._next = 0
+                        status, self._next = waits.wait_for_predecessors(
+                            ctx, rt, point, self._waits, self._next
+                        )
                 except PlansysBridgeError as exc:
                     label = _AT_START_REQ if step == 1 else _PREDECESSORS
                     rt.reason = f"{label}: {exc}"
@@ -132,24 +148,6 @@ class StandardAction(Behaviour):
                 return status
             self._step = step + 1
             self._entered = False
-
-    def _wait(self, step: int) -> Status:
-        """The waiting steps: predecessors of the start (0), the at-start
-        requirement (1), predecessors of the end (``_END_WAIT``)."""
-        ctx, rt = self.ctx, self.rt
-        if step == 1:
-            if not self._entered:
-                self._entered = True
-                self._timeout = ctx.options.at_start_timeout_for(rt.step.action)
-                self._deadline = waits.at_start_deadline(ctx, rt, self._timeout)
-            return waits.wait_at_start_req(ctx, rt, self._deadline, self._timeout)
-        point = START if step == 0 else END
-        if not self._entered:
-            self._entered = True
-            self._waits = ctx.graph.waits(rt.index, point)
-            self._next = 0
-        status, self._next = waits.wait_for_predecessors(ctx, rt, point, self._waits, self._next)
-        return status
 
     def _run(self) -> Status:
         """The reactive part: guards first (the overrun, then the over-all
