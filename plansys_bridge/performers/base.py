@@ -47,6 +47,7 @@ from plansys_bridge.performers.goal import (
     PerformerContext,
     arguments_match,
     goal_of,
+    last_request,
     same_goal,
 )
 from plansys_bridge.performers.kind import PerformerKind
@@ -335,7 +336,9 @@ class ActionPerformer(PerformerKind, ABC):
             spec = self.actions.get(msg.action)
             if spec is None or (spec and not arguments_match(spec, msg.arguments)):
                 return
-            goal = goal_of(msg)
+            last_msg, goal = last_request[0]  # goal_of's look-up, inlined
+            if last_msg is not msg:
+                goal = goal_of(msg)
         try:
             if self._own_accepts and not self.accepts(goal):
                 return

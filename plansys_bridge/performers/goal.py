@@ -71,7 +71,9 @@ def same_goal(goal: ActionGoal, msg: ActionExecution) -> bool:
     return goal.action == msg.action and goal.arguments == tuple(msg.arguments)
 
 
-_last_request: list[tuple[object, ActionGoal]] = [(None, ActionGoal("", (), ""))]
+last_request: list[tuple[object, ActionGoal]] = [(None, ActionGoal("", (), ""))]
+"""``[(REQUEST, its goal)]``: what :func:`goal_of` hands out again; the performer base
+class reads it inline (every bidder but the first of an auction finds its goal here)."""
 
 
 def goal_of(msg: ActionExecution) -> ActionGoal:
@@ -83,9 +85,9 @@ def goal_of(msg: ActionExecution) -> ActionGoal:
     which is frozen) and handed out again: goals are frozen too, so sharing is safe.
     The entry is read and replaced whole, so loops on other threads cannot mix two.
     """
-    last_msg, last_goal = _last_request[0]
+    last_msg, last_goal = last_request[0]
     if last_msg is msg:
         return last_goal
     goal = ActionGoal(msg.action, tuple(msg.arguments), msg.request_id)
-    _last_request[0] = (msg, goal)
+    last_request[0] = (msg, goal)
     return goal
