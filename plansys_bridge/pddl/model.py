@@ -19,7 +19,8 @@ field types. A construct that can be written with older ones says so in a
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import ClassVar, Literal, TypeAlias
+from functools import partial
+from typing import Literal, TypeAlias
 
 from plansys_bridge.errors import SourceLocation
 
@@ -123,17 +124,24 @@ NumExpr: TypeAlias = Number | FluentRef | DurationRef | BinaryOp | Negate
 class Atom:
     """A predicate application; ground when no argument is a variable.
 
-    Its hash is worked out once, when it is made: facts are hashed over and over
-    (journaled tables, sets of facts, memos), and the generated ``__hash__`` builds
-    and hashes a tuple each time. Equality, ``repr`` and ``fields`` are the
-    dataclass's own; the kept hash is left out of pickles and copies (string hashes
-    differ from one process to the next) and worked out again when they are loaded.
+    Its hash is worked out once, when it is made, and handed to Python without a
+    Python-level call: facts are hashed over and over (journaled tables, sets of
+    facts, memos, the executor's sets), and a ``def __hash__`` costs a Python frame
+    each time (the generated one also built and hashed a tuple). The slot named
+    ``__hash__`` holds the bound ``__index__`` of the kept hash, a C method returning
+    that very int, which the interpreter's hash slot calls as it would a method;
+    ``hash(atom)`` is ``hash((predicate, args))`` as before. Equality, ``repr`` and
+    ``fields`` are the dataclass's own; the kept hash is left out of pickles and
+    copies (string hashes differ from one process to the next) and worked out
+    again when they are loaded. Arguments that cannot be hashed (a list) make an
+    atom whose hashing fails as it always did, with the same ``TypeError``.
     """
+
+    __slots__ = ("__dict__", "__hash__", "__weakref__")
 
     predicate: str
     args: tuple[Term, ...] = ()
     loc: SourceLocation | None = field(default=None, compare=False, hash=False, repr=False)
-    _hash: ClassVar[int]
 
     def __init__(
         self, predicate: str, args: tuple[Term, ...] = (), loc: SourceLocation | None = None
@@ -145,16 +153,10 @@ class Atom:
         d["args"] = args
         d["loc"] = loc
         try:
-            kept = hash((predicate, args))
+            kept = hash((predicate, args)).__index__
         except TypeError:  # unhashable arguments (a list): hashing fails as it always did
-            return
-        d["_hash"] = kept
-
-    def __hash__(self) -> int:
-        try:
-            return self._hash
-        except AttributeError:
-            return hash((self.predicate, self.args))
+            kept = partial(hash, (predicate, args))
+        _set_hash(self, kept)
 
     def __getstate__(self) -> dict[str, object]:
         return {"predicate": self.predicate, "args": self.args, "loc": self.loc}
@@ -164,6 +166,10 @@ class Atom:
 
     def __str__(self) -> str:
         return "(" + " ".join((self.predicate, *self.args)) + ")"
+
+
+_set_hash = Atom.__dict__["__hash__"].__set__
+"""Writes an atom's ``__hash__`` slot (the frozen dataclass refuses attribute writes)."""
 
 
 @dataclass(frozen=True)

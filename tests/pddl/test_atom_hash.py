@@ -10,6 +10,8 @@ import subprocess
 import sys
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from plansys_bridge.errors import SourceLocation
 from plansys_bridge.pddl.model import Atom
@@ -65,3 +67,55 @@ def test_a_pickle_loads_with_the_hash_of_the_loading_process() -> None:
         check=True,
     )
     assert out.stdout.decode().split() == ["True", "True"]
+
+
+def test_every_pickle_protocol_and_a_weak_reference_keep_working() -> None:
+    import weakref
+
+    a = Atom("at", ("r1", "k"), SourceLocation("d.pddl", 3, 4))
+    for protocol in range(pickle.HIGHEST_PROTOCOL + 1):
+        other = pickle.loads(pickle.dumps(a, protocol))
+        assert other == a and hash(other) == hash(a) and other.loc == a.loc
+    assert weakref.ref(a)() is a
+    assert vars(a) == {"predicate": "at", "args": ("r1", "k"), "loc": a.loc}
+
+
+def test_unhashable_arguments_fail_with_the_tuples_own_error() -> None:
+    a = Atom("at", ["r1"])  # type: ignore[arg-type]
+    with pytest.raises(TypeError) as got:
+        hash(a)
+    with pytest.raises(TypeError) as expected:
+        hash(("at", ["r1"]))
+    assert str(got.value) == str(expected.value)
+    with pytest.raises(TypeError):
+        _ = {a}
+
+
+def test_hashing_runs_no_python_code() -> None:
+    # The point of the kept hash: no Python frame per dict or set operation.
+    a = Atom("at", ("r1", "k"))
+    frames: list[str] = []
+
+    def watch(frame: object, event: str, _arg: object) -> None:
+        if event == "call":
+            frames.append(frame.f_code.co_name)  # type: ignore[attr-defined]
+
+    table = {a: None}
+    sys.setprofile(watch)
+    try:
+        found = a in table and a in {a} and hash(a) == a.__hash__()
+    finally:
+        sys.setprofile(None)
+    assert found and frames == []
+
+
+@given(
+    st.text(min_size=1, max_size=8),
+    st.lists(st.text(max_size=6), max_size=4).map(tuple),
+)
+def test_hash_and_membership_are_those_of_the_pair(predicate: str, args: tuple[str, ...]) -> None:
+    a = Atom(predicate, args)
+    assert hash(a) == hash((predicate, args)) == a.__hash__()
+    twin = copy.copy(a)
+    assert twin is not a and twin in {a} and {a: 1}[twin] == 1
+    assert Atom(predicate + "x", args) not in {a}
