@@ -50,7 +50,9 @@ __all__ = [
     "effect_access",
     "expr_fluents",
     "fixed_condition_vars",
+    "fixed_effect_access",
     "ground_fluent",
+    "literal_atoms",
     "numeric_class",
     "reads_fixed",
     "walk_effect",
@@ -241,6 +243,35 @@ def fixed_condition_vars(cond: Condition) -> set[Var] | None:
     return out
 
 
+def literal_atoms(cond: Condition) -> tuple[tuple[Atom, ...], tuple[Atom, ...]] | None:
+    """The atoms that must be true and those that must be false for ``cond`` to
+    hold, when it is a conjunction of ground literals of base predicates (the
+    caller checks :func:`reads_fixed`, which refuses derived ones); else None.
+
+    Why: the plan graph builder checks such a condition (nearly every at-start
+    requirement) on the truth values it keeps per atom, without a state."""
+    pos: list[Atom] = []
+    neg: list[Atom] = []
+    stack: list[Condition] = [cond]
+    while stack:
+        node = stack.pop()
+        kind = type(node)
+        positive = kind is not Not
+        if not positive:
+            node = node.operand  # type: ignore[union-attr]
+            kind = type(node)
+        elif kind is And:
+            stack += reversed(node.operands)  # type: ignore[union-attr]
+            continue
+        if kind is not Atom:
+            return None
+        args = node.args  # type: ignore[union-attr]
+        if type(args) is not tuple or any(a[:1] == "?" for a in args):
+            return None
+        (pos if positive else neg).append(node)  # type: ignore[arg-type]
+    return tuple(pos), tuple(neg)
+
+
 def _fixed_effect_parts(
     effect: Effect,
 ) -> tuple[set[Atom], set[Atom], set[FluentKey], list[NumericEffect]] | None:
@@ -292,17 +323,39 @@ def effect_access(ev: Evaluator, effect: Effect, state: State, fixed: bool = Fal
     conditional effects and the values of its numeric effects are reads; deletes
     that it also adds count as adds. ``fixed``: the caller knows the effect does
     the same in every state (:func:`writes_fixed`)."""
-    parts = _fixed_effect_parts(effect) if fixed else None
-    if parts is not None:  # no evaluation context needed
-        adds, deletes, numeric, leaves = parts
-        walked: Iterable[tuple[Effect, Mapping[str, str]]] = [(e, GROUND) for e in leaves]
-    else:
-        adds, deletes, numeric = ev.effect_atoms(effect, GROUND, state)
-        walked = walk_effect(effect, GROUND, ev, state)
+    found = fixed_effect_access(effect) if fixed else None
+    if found is not None:
+        return found
+    adds, deletes, numeric = ev.effect_atoms(effect, GROUND, state)
+    walked = walk_effect(effect, GROUND, ev, state)
+    return _access(ev, state, adds, deletes, numeric, walked, fixed)
+
+
+def fixed_effect_access(effect: Effect) -> EffectAccess | None:
+    """:func:`effect_access` of an effect :func:`writes_fixed` accepts, read off its
+    structure without a state (the plan graph builder then need not bring its
+    simulated state up to date); None when an argument is a variable."""
+    parts = _fixed_effect_parts(effect)
+    if parts is None:
+        return None
+    adds, deletes, numeric, leaves = parts
+    return _access(None, None, adds, deletes, numeric, [(e, GROUND) for e in leaves], True)
+
+
+def _access(
+    ev: Evaluator | None,
+    state: State | None,
+    adds: AbstractSet[Atom],
+    deletes: AbstractSet[Atom],
+    numeric: AbstractSet[FluentKey],
+    walked: Iterable[tuple[Effect, Mapping[str, str]]],
+    fixed: bool,
+) -> EffectAccess:
     read: set[Var] = set()
     ops: dict[FluentKey, str] = {}
     for sub, binds in walked:
         if isinstance(sub, WhenEffect):
+            assert ev is not None and state is not None  # a fixed effect has no condition
             read |= condition_vars(ev, sub.condition, binds, state)
         elif isinstance(sub, NumericEffect):
             key = ground_fluent(sub.fluent, binds)

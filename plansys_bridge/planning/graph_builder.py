@@ -23,13 +23,14 @@ from collections.abc import Collection, Sequence
 from plansys_bridge.errors import ExecutionError
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
 from plansys_bridge.knowledge.state import State
-from plansys_bridge.pddl.model import And, Atom, Condition, Domain, Effect, Not
+from plansys_bridge.pddl.model import And, Atom, Condition, Domain, Effect
 from plansys_bridge.planning.effect_access import (
-    EffectAccess,
     Var,
     condition_vars,
     effect_access,
     fixed_condition_vars,
+    fixed_effect_access,
+    literal_atoms,
     reads_fixed,
     writes_fixed,
     written_names,
@@ -47,6 +48,10 @@ Edges = dict[tuple[int, int], tuple[Kind, VarHistory]]
 _Reads = tuple[VarHistory, ...] | None
 """A condition's histories, in the order it reads them; None: ask at each happening."""
 
+_Lits = tuple[tuple[VarHistory, ...], tuple[VarHistory, ...]] | None
+"""The histories of the atoms a condition of literals needs true and false; None:
+the condition is not only literals (the evaluator decides whether it holds)."""
+
 
 class _Moves:
     """What one ground action's happenings read and write, worked out the first
@@ -58,10 +63,13 @@ class _Moves:
         "check_start",
         "end",
         "end_access",
+        "end_lits",
         "over",
         "over_holds",
+        "over_lits",
         "start",
         "start_access",
+        "start_lits",
         "watched",
     )
 
@@ -71,24 +79,29 @@ class _Moves:
         self.check_over = type(g.over_all) is not And or bool(g.over_all.operands)
         self.check_end = type(g.at_end) is not And or bool(g.at_end.operands)
         self.start: _Reads = None
+        self.start_lits: _Lits = None
         self.start_access: Access | None = None
         self.over: _Reads = None
+        self.over_lits: _Lits = None
         self.watched: tuple[VarHistory, ...] = ()
         self.over_holds: bool | None = None
         """Whether the over-all requirement holds, kept when its value cannot change
         during the plan (literals of atoms no action of the plan changes)."""
         self.end: _Reads = None
+        self.end_lits: _Lits = None
         self.end_access: Access | None = None
 
 
-def _literals(cond: Condition) -> bool:
-    """A conjunction of atoms and negated atoms: its value depends only on them."""
-    kind = type(cond)
-    if kind is And:
-        return all(map(_literals, cond.operands))  # type: ignore[union-attr]
-    if kind is Not:
-        return type(cond.operand) is Atom  # type: ignore[union-attr]
-    return kind is Atom
+def _all_hold(lits: tuple[tuple[VarHistory, ...], tuple[VarHistory, ...]]) -> bool:
+    """Whether a condition of literals holds where the simulation is: its positive
+    atoms true and its negated ones false (the at-start check does this inline)."""
+    for hist in lits[0]:
+        if not hist.value:
+            return False
+    for hist in lits[1]:  # noqa: SIM110 (any() of a generator: a call per atom)
+        if hist.value:
+            return False
+    return True
 
 
 _AT_START: When = "at start"
@@ -119,6 +132,13 @@ class GraphBuilder:
         """Per atom's history, the step whose effect last set it (keyed by history:
         hashing an atom is a Python call, a history's identity hash is not)."""
         self.pos: list[int] = []
+        self.state = state
+        """The simulated state once the first ``synced`` happenings of the order
+        are applied; ``applied`` happenings are (on the atoms' truth values)."""
+        self.synced = 0
+        self.applied = 0
+        self._order: Sequence[int] = ()
+        self._moves: Sequence[_Moves] = ()
         self._changeable: set[tuple[str, str]] | None = set()
         self._derived = ev._derived_rules
 
@@ -175,65 +195,83 @@ class GraphBuilder:
         pos = self.pos = [0] * (2 * len(self.steps))
         for p, h in enumerate(order):
             pos[h] = p
+        self._order, self._moves = order, moves
         ev, steps, achieved = self.ev, self.steps, self.achieved
         holds = ev.holds
-        state = self.initial
         open_over_all: dict[int, Collection[VarHistory]] = {}
         watchers: dict[VarHistory, set[int]] = {}
-        for h in order:
+        for p, h in enumerate(order):
             i = h >> 1
             g = ground[i]
             m = moves[i]
             end = h & 1
             if end:
                 cond, effect, check = g.at_end, g.end_effect, m.check_end
-                reads, access, when = m.end, m.end_access, _AT_END
+                reads, lits, access, when = m.end, m.end_lits, m.end_access, _AT_END
             else:
                 cond, effect, check = g.at_start, g.start_effect, m.check_start
-                reads, access, when = m.start, m.start_access, _AT_START
+                reads, lits, access, when = m.start, m.start_lits, m.start_access, _AT_START
             if check:
                 if reads is None:
-                    reads = self._reads(cond, state, m, _PARTS[end])
-                if not holds(cond, state, GROUND, steps[i].duration):
-                    self._unexplained(i, when, cond, state)
+                    reads, lits = self._reads(cond, m, _PARTS[end])
+                if lits is None:
+                    ok = holds(cond, self._state(), GROUND, steps[i].duration)
+                else:  # literals: read off the atoms' truth values (no state, no call)
+                    ok = True
+                    for hist in lits[0]:
+                        if not hist.value:
+                            ok = False
+                            break
+                    else:
+                        for hist in lits[1]:
+                            if hist.value:
+                                ok = False
+                                break
+                if not ok:
+                    self._unexplained(i, when, cond)
             # the over-all interval closes before the end effects
             # (a watched variable keeps its entry in ``watchers`` once it has one)
             if end and i in open_over_all:
                 for var in open_over_all.pop(i):
                     watchers[var].discard(i)
             if access is None:
-                access = self._access(effect, state, m, _ACCESS_PARTS[end])
-            found, read, writes, written, added, adds, deleted = access
-            if found.plain:  # same adds and deletes in every state: no need to walk
-                # (deletes go first, so every atom added is then true)
-                if adds or deleted:
-                    state = state.with_facts(deleted, adds)
+                access = self._access(effect, m, _ACCESS_PARTS[end])
+            found, read, writes, written, added, dropped = access
+            if found.plain:  # same adds and deletes in every state: truth values only
+                for hist in dropped:
+                    hist.value = False
                 for hist in added:
+                    hist.value = True
                     achieved[hist] = i
             else:
-                state = ev.apply(effect, state, GROUND, steps[i].duration)
+                state = self.state = ev.apply(effect, self._state(), GROUND, steps[i].duration)
+                self.synced = p + 1
+                for hist in written:
+                    if hist.is_atom:
+                        hist.value = hist.var[1] in state
                 for hist in added:
-                    if hist.var[1] in state:
+                    if hist.value:
                         achieved[hist] = i
-            if reads:
-                self._read_all(h, reads + read if read else reads, h)
-            elif read:
-                self._read_all(h, read, h)
-            if writes:
-                self._write_all(h, writes)
+            self.applied = p + 1
+            over: Collection[VarHistory] = ()
             if not end and m.check_over:
-                over = m.over
-                if over is None:
-                    over = self._reads(g.over_all, state, m, "over")
-                if over:
-                    self._read_all(h, over, h + 1)
-                ok = m.over_holds
+                over_lits = m.over_lits
+                if m.over is None:
+                    over, over_lits = self._reads(g.over_all, m, "over")
+                else:
+                    over = m.over
+            self._record(h, reads + read if reads and read else reads or read, writes, over)
+            if not end and m.check_over:
+                ok = m.over_holds  # type: ignore[assignment]
                 if ok is None:
-                    ok = holds(g.over_all, state, GROUND, steps[i].duration)
-                    if m.over is not None and not m.watched and _literals(g.over_all):
+                    if over_lits is None:
+                        ok = holds(g.over_all, self._state(), GROUND, steps[i].duration)
+                    else:
+                        ok = _all_hold(over_lits)
+                    if m.over is not None and not m.watched and over_lits is not None:
                         m.over_holds = ok  # reads only what no action changes
                 if not ok:
-                    self._unexplained(i, "over all", g.over_all, state)
+                    self._unexplained(i, "over all", g.over_all)
                 else:
                     watched = m.watched if m.over is not None else self._watched(over)
                     if watched:
@@ -247,73 +285,104 @@ class GraphBuilder:
             if watchers:
                 for var in written:
                     if watchers.get(var):
-                        self._recheck(i, watchers[var], ground, state, open_over_all, watchers)
-        return state
+                        self._recheck(i, watchers[var], ground, open_over_all, watchers)
+        return self._state()
+
+    def _state(self) -> State:
+        """The simulated state, brought up to date with the plain effects applied
+        since it was last made (on the atoms' truth values only).
+
+        Why: most happenings need no state (their conditions are literals, their
+        effects plain), so the state is made only when the evaluator needs one,
+        in one change for all the happenings since the last time."""
+        if self.synced < self.applied:
+            moves = self._moves
+            changed: dict[VarHistory, None] = {}
+            for h in self._order[self.synced : self.applied]:
+                m = moves[h >> 1]
+                access = m.end_access if h & 1 else m.start_access
+                assert access is not None  # a plain effect's access is kept
+                for hist in access[5]:
+                    changed[hist] = None
+                for hist in access[4]:
+                    changed[hist] = None
+            self.state = self.state.with_facts(
+                [hist.var[1] for hist in changed if not hist.value],  # type: ignore[misc]
+                [hist.var[1] for hist in changed if hist.value],  # type: ignore[misc]
+            )
+            self.synced = self.applied
+        return self.state
 
     def _recheck(
         self,
         i: int,
         watching: set[int],
         ground: Sequence[GroundAction],
-        state: State,
         open_over_all: dict[int, Collection[VarHistory]],
         watchers: dict[VarHistory, set[int]],
     ) -> None:
         """Check again the over-all requirements of the ``watching`` steps after step
         ``i`` changed a variable they read; a broken one is named and unwatched."""
+        state = self._state()
         for j in tuple(watching):
             if j == i:
                 continue
             gj = ground[j]
             if not self.ev.holds(gj.over_all, state, GROUND, self.steps[j].duration):
                 detail = f"is broken by step {i} {self.steps[i].text} while it runs"
-                self._unexplained(j, "over all", gj.over_all, state, detail)
+                self._unexplained(j, "over all", gj.over_all, detail)
                 for v in open_over_all.pop(j, ()):
                     watchers[v].discard(j)
 
     # ------------------------------------------------------------ accesses
 
-    def _reads(self, cond: Condition, state: State, m: _Moves, part: str) -> tuple[VarHistory, ...]:
-        """The histories ``cond`` reads in ``state``, kept in ``m`` (with the
-        over-all ones worth watching) when they are the same in every state."""
+    def _reads(self, cond: Condition, m: _Moves, part: str) -> tuple[tuple[VarHistory, ...], _Lits]:
+        """The histories ``cond`` reads where the simulation is, and its literals'
+        histories (None: not only literals), kept in ``m`` (with the over-all ones
+        worth watching) when they are the same in every state."""
         fixed = reads_fixed(cond, self._derived)
         listed = fixed_condition_vars(cond) if fixed else None
         if listed is None:
-            listed = condition_vars(self.ev, cond, GROUND, state)
-        found = tuple(map(self._history, listed))
+            listed = condition_vars(self.ev, cond, GROUND, self._state())
+        history = self._history
+        found = tuple(map(history, listed))
+        lits: _Lits = None
         if fixed:
             setattr(m, part, found)
+            atoms = literal_atoms(cond)
+            if atoms is not None:
+                lits = (
+                    tuple([history(("a", a)) for a in atoms[0]]),
+                    tuple([history(("a", a)) for a in atoms[1]]),
+                )
+                setattr(m, part + "_lits", lits)
             if part == "over":
                 m.watched = self._watched(found)
-        return found
+        return found, lits
 
     def _watched(self, over: Collection[VarHistory]) -> tuple[VarHistory, ...]:
         """The over-all reads some action may change (only they can be broken)."""
         return tuple(var for var in over if var.changeable)
 
-    def _access(self, effect: Effect, state: State, m: _Moves, part: str) -> Access:
-        """What ``effect`` reads and writes in ``state``, kept in ``m`` when it is
-        the same in every state."""
+    def _access(self, effect: Effect, m: _Moves, part: str) -> Access:
+        """What ``effect`` reads and writes where the simulation is, kept in ``m``
+        when it is the same in every state."""
         fixed = writes_fixed(effect)
-        found = self._resolve(effect_access(self.ev, effect, state, fixed))
+        access = fixed_effect_access(effect) if fixed else None
+        if access is None:
+            access = effect_access(self.ev, effect, self._state(), fixed)
+        history = self._history
+        found = (
+            access,
+            tuple(map(history, access.read)),
+            tuple([(history(var), kind) for var, kind in access.writes]),
+            tuple(map(history, access.written)),
+            tuple([history(("a", atom)) for atom in access.adds]),
+            tuple([history(("a", atom)) for atom in access.deleted]),
+        )
         if fixed:
             setattr(m, part, found)
         return found
-
-    def _resolve(self, access: EffectAccess) -> Access:
-        """``access`` with its variables' histories (the written ones in the order
-        of ``access.written``), the histories of the atoms it adds, and the atoms
-        it adds and deletes."""
-        history = self._history
-        return (
-            access,
-            tuple(map(history, access.read)),
-            tuple((history(var), kind) for var, kind in access.writes),
-            tuple(map(history, access.written)),
-            tuple([history(("a", atom)) for atom in access.adds]),
-            tuple(access.adds),
-            tuple(access.deleted),
-        )
 
     def _history(self, var: Var) -> VarHistory:
         hist = self.vars.get(var)
@@ -322,7 +391,8 @@ class GraphBuilder:
             if var[0] == "a":
                 atom = var[1]
                 assert isinstance(atom, Atom)
-                hist = VarHistory(var, True, "add" if atom in self.initial else "del")
+                value = atom in self.initial
+                hist = VarHistory(var, True, "add" if value else "del", value=value)
                 name = atom.predicate
             else:
                 hist = VarHistory(var, False, "read")
@@ -331,44 +401,54 @@ class GraphBuilder:
             self.vars[var] = hist
         return hist
 
-    def _read_all(self, h: int, reads: Sequence[VarHistory], tail: int) -> None:
-        """Happening ``h`` reads ``reads`` until happening ``tail`` (its own, or its
-        step's end for an over-all requirement). An atom read waits for the atom's
-        latest writer (written out here: a happening makes a few such reads); a
-        fluent read takes :meth:`_read`."""
-        pos, edges, succ, mine, step = self.pos, self.edges, self.succ, self.pos[h], h >> 1
-        for hist in reads:
-            if not hist.is_atom:
-                self._read(hist, h, tail)
-                continue
-            src = hist.latest_effect
-            if src is not None and src >> 1 != step and pos[src] < mine:
-                if (src, h) not in edges:
-                    edges[(src, h)] = ("causal", hist)
-                    succ[src].append(h)
-                elif edges[(src, h)][0] != "causal":
-                    edges[(src, h)] = ("causal", hist)
-            hist.current.append((tail, None))
+    def _record(
+        self,
+        h: int,
+        reads: Sequence[VarHistory],
+        writes: Sequence[tuple[VarHistory, str]],
+        over: Collection[VarHistory],
+    ) -> None:
+        """Happening ``h``'s accesses, in one call: it reads ``reads``, then writes
+        ``writes``, then (a start) reads its over-all requirement's ``over`` until
+        its step's end.
 
-    def _write_all(self, h: int, writes: Sequence[tuple[VarHistory, str]]) -> None:
-        """Happening ``h`` writes: after the members of the variable's previous run
-        (a write of the current run's kind commutes with the run, except an
-        assignment), keeping a causal or earlier reason for a pair."""
+        An atom read waits for the atom's latest writer (written out here: a
+        happening makes a few such reads); a fluent read takes :meth:`_read`. A
+        write goes after the members of the variable's previous run (a write of the
+        current run's kind commutes with the run, except an assignment), keeping a
+        causal or earlier reason for a pair."""
         pos, edges, succ, mine, step = self.pos, self.edges, self.succ, self.pos[h], h >> 1
-        for hist, kind in writes:
-            if hist.kind == kind and kind != "assign":
-                members = hist.previous
-            else:
-                members = hist.previous = hist.current
-                hist.current = []
-                hist.kind = kind
-            for src, role in members:
-                if src >> 1 == step or pos[src] >= mine or (src, h) in edges:
+        tail = h
+        for group in (reads, over):
+            for hist in group:
+                if not hist.is_atom:
+                    self._read(hist, h, tail)
                     continue
-                edges[(src, h)] = ("effects" if role == "effects" else "threat", hist)
-                succ[src].append(h)
-            hist.current.append((h, "effects"))
-            hist.latest_effect = h
+                src = hist.latest_effect
+                if src is not None and src >> 1 != step and pos[src] < mine:
+                    if (src, h) not in edges:
+                        edges[(src, h)] = ("causal", hist)
+                        succ[src].append(h)
+                    elif edges[(src, h)][0] != "causal":
+                        edges[(src, h)] = ("causal", hist)
+                hist.current.append((tail, None))
+            if tail != h:
+                break
+            tail = h + 1  # the writes come between the reads and the over-all reads
+            for hist, kind in writes:
+                if hist.kind == kind and kind != "assign":
+                    members = hist.previous
+                else:
+                    members = hist.previous = hist.current
+                    hist.current = []
+                    hist.kind = kind
+                for src, role in members:
+                    if src >> 1 == step or pos[src] >= mine or (src, h) in edges:
+                        continue
+                    edges[(src, h)] = ("effects" if role == "effects" else "threat", hist)
+                    succ[src].append(h)
+                hist.current.append((h, "effects"))
+                hist.latest_effect = h
 
     def _read(self, hist: VarHistory, head: int, tail: int) -> None:
         """A fluent read: after every member of the last run of changes."""
@@ -399,8 +479,6 @@ class GraphBuilder:
         elif kind == "causal" and found[0] != "causal":
             self.edges[key] = (kind, hist)
 
-    def _unexplained(
-        self, i: int, when: When, cond: Condition, state: State, detail: str = ""
-    ) -> None:
-        text = describe_unmet(self.ev, cond, state, GROUND, self.steps[i].duration)
+    def _unexplained(self, i: int, when: When, cond: Condition, detail: str = "") -> None:
+        text = describe_unmet(self.ev, cond, self._state(), GROUND, self.steps[i].duration)
         self.unexplained.append(UnexplainedRequirement(i, self.steps[i].text, when, text, detail))

@@ -12,7 +12,6 @@ from dataclasses import dataclass, field
 from typing import TypeAlias
 
 from plansys_bridge.knowledge.state import FluentKey
-from plansys_bridge.pddl.model import Atom
 from plansys_bridge.planning.effect_access import EffectAccess, Var
 from plansys_bridge.planning.orderings import Kind
 
@@ -40,6 +39,11 @@ class VarHistory:
     only such variables for over-all requirements an effect breaks)."""
     text: str | None = None
     """:func:`var_text` of ``var``, written the first time an ordering needs it."""
+    value: bool = False
+    """An atom's truth where the simulation has got to: the builder checks
+    conditions of literals and applies plain effects on these values, and brings
+    its :class:`~plansys_bridge.knowledge.state.State` up to date only when the
+    evaluator needs one."""
 
 
 Access: TypeAlias = tuple[
@@ -48,11 +52,10 @@ Access: TypeAlias = tuple[
     tuple[tuple[VarHistory, str], ...],
     tuple[VarHistory, ...],
     tuple[VarHistory, ...],
-    tuple[Atom, ...],
-    tuple[Atom, ...],
+    tuple[VarHistory, ...],
 ]
 """An effect's accesses with the histories it reads, writes (and how) and changes,
-the histories of the atoms it adds, and the atoms it adds and deletes."""
+and the histories of the atoms it adds and of those it deletes (and does not add)."""
 
 
 def subject_text(hist: VarHistory) -> str:
