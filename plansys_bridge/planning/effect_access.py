@@ -225,7 +225,8 @@ def fixed_condition_vars(cond: Condition) -> set[Var] | None:
             args = node.args  # type: ignore[union-attr]
             if type(args) is not tuple or any(a[:1] == "?" for a in args):
                 return None
-            (pos if positive else neg).add(Atom(node.predicate, args))  # type: ignore[union-attr]
+            # the atom itself: equal, with the same hash, to the evaluator's new one
+            (pos if positive else neg).add(node)  # type: ignore[arg-type]
         elif kind is And:
             stack += [(c, positive) for c in reversed(node.operands)]  # type: ignore[union-attr]
         elif kind is Not:
@@ -299,7 +300,9 @@ def _fixed_effect_parts(
         atom: Atom = node.atom  # type: ignore[union-attr]
         if type(atom.args) is not tuple or any(a[:1] == "?" for a in atom.args):
             return None
-        (adds if kind is AddEffect else deletes).add(Atom(atom.predicate, atom.args))
+        if type(atom) is not Atom:
+            atom = Atom(atom.predicate, atom.args)
+        (adds if kind is AddEffect else deletes).add(atom)
     return adds, deletes, fluents, numeric
 
 

@@ -22,7 +22,7 @@ from collections.abc import Collection, Sequence
 
 from plansys_bridge.errors import ExecutionError
 from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
-from plansys_bridge.knowledge.state import State
+from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import And, Atom, Condition, Domain, Effect
 from plansys_bridge.planning.effect_access import (
     Var,
@@ -126,7 +126,9 @@ class GraphBuilder:
         self.edges: Edges = {}
         self.succ: list[list[int]] = [[] for _ in range(2 * len(self.steps))]
         """Per happening, the targets of its edges (in the order they were found)."""
-        self.vars: dict[Var, VarHistory] = {}
+        self._atoms: dict[tuple[str, tuple[str, ...]], VarHistory] = {}
+        self._fluents: dict[FluentKey, VarHistory] = {}
+        """The histories, by atom (predicate, arguments) and by fluent."""
         self.unexplained: list[UnexplainedRequirement] = []
         self.achieved: dict[VarHistory, int] = {}
         """Per atom's history, the step whose effect last set it (keyed by history:
@@ -385,20 +387,27 @@ class GraphBuilder:
         return found
 
     def _history(self, var: Var) -> VarHistory:
-        hist = self.vars.get(var)
-        if hist is None:
-            changeable = self._changeable
-            if var[0] == "a":
-                atom = var[1]
-                assert isinstance(atom, Atom)
+        """``var``'s history, made on first use. Kept by the atom's predicate and
+        arguments (or the fluent's key): hashing and comparing those takes no
+        Python call, while an :class:`Atom`'s equality is one."""
+        if var[0] == "a":
+            atom: Atom = var[1]  # type: ignore[assignment]
+            try:
+                return self._atoms[atom.predicate, atom.args]
+            except KeyError:
                 value = atom in self.initial
                 hist = VarHistory(var, True, "add" if value else "del", value=value)
+                self._atoms[atom.predicate, atom.args] = hist
                 name = atom.predicate
-            else:
-                hist = VarHistory(var, False, "read")
-                name = var[1][0]  # type: ignore[index]
-            hist.changeable = changeable is None or (var[0], name) in changeable
-            self.vars[var] = hist
+        else:
+            key: FluentKey = var[1]  # type: ignore[assignment]
+            try:
+                return self._fluents[key]
+            except KeyError:
+                hist = self._fluents[key] = VarHistory(var, False, "read")
+                name = key[0]
+        changeable = self._changeable
+        hist.changeable = changeable is None or (var[0], name) in changeable
         return hist
 
     def _record(
