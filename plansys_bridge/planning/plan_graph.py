@@ -183,9 +183,34 @@ class PlanGraph:
     def successors(self, step: int) -> list[int]:
         return list(self.graph.successors(step))
 
+    @property
+    def start_waits(self) -> Sequence[tuple[tuple[int, Point], ...]]:
+        """Per step, what its start waits for: ``start_waits[i]`` is
+        ``waits(i, START)`` (the same tuple), read without a call per action."""
+        return self._start_waits
+
+    @property
+    def end_waits(self) -> Sequence[tuple[tuple[int, Point], ...]]:
+        """Per step, what its end waits for (``waits(i, END)``)."""
+        return self._end_waits
+
     def roots(self) -> list[int]:
         """Steps that can start at once."""
-        return [i for i in range(len(self.steps)) if not self._start_waits[i]]
+        return [i for i, w in enumerate(self._start_waits) if not w]
+
+    def dependents(self) -> list[set[int]]:
+        """Per step, the steps with a start or end wait on it: new sets, filled in
+        the order the executor's own loop over :meth:`waits` fills them (by
+        dependent step, start waits before end waits), so they are equal and
+        iterate alike. Why: the executor needs them once per plan, and asking
+        :meth:`waits` twice per step cost two calls per action."""
+        found: list[set[int]] = [set() for _ in self._start_waits]
+        for i, (start, end) in enumerate(zip(self._start_waits, self._end_waits, strict=True)):
+            for j, _ in start:
+                found[j].add(i)
+            for j, _ in end:
+                found[j].add(i)
+        return found
 
     def ordered_subgoals(self, goal_atoms: Iterable[Atom]) -> list[tuple[Atom, int | None]]:
         """Goal atoms in the order the plan achieves them, each with its achieving step

@@ -274,3 +274,42 @@ def test_fixed_accesses_read_off_the_structure_equal_the_evaluators() -> None:
                     assert list(fast_access.written) == list(general_access.written)
                     seen += 1
     assert seen > 30
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(plans())
+def test_the_executors_views_equal_its_own_loops_over_waits(plan: Plan) -> None:
+    """dependents(), roots(), start_waits and end_waits say what the executor
+    worked out from waits() itself (sets filled in the same order iterate alike)."""
+    graph = build_plan_graph(plan, DOMAIN, _knowledge().state())
+    n = len(plan)
+    expected: list[set[int]] = [set() for _ in range(n)]
+    for i in range(n):
+        for point in ("start", "end"):
+            for j, _ in graph.waits(i, point):  # type: ignore[arg-type]
+                expected[j].add(i)
+    found = graph.dependents()
+    assert found == expected
+    assert [list(s) for s in found] == [list(s) for s in expected]
+    assert found is not graph.dependents()  # the caller's own sets
+    assert graph.roots() == [i for i in range(n) if not graph.waits(i, "start")]
+    for i in range(n):
+        assert graph.start_waits[i] is graph.waits(i, "start")
+        assert graph.end_waits[i] is graph.waits(i, "end")
+
+
+def test_dependents_of_a_chain_and_a_fork() -> None:
+    """Hand-checked: go s1->s2 then go s2->s3 (the second needs the first's end)."""
+    plan = Plan(
+        (
+            PlanStep(0.0, "go", ("s1", "s2"), 2.0),
+            PlanStep(2.5, "go", ("s2", "s3"), 2.0),
+            PlanStep(0.0, "light", ("s3",), 1.0),
+        )
+    )
+    graph = build_plan_graph(plan, DOMAIN, _knowledge().state())
+    deps = graph.dependents()
+    assert 1 in deps[0]
+    assert 0 not in deps[1]
+    assert graph.roots() == [i for i in range(3) if not graph.start_waits[i]]
+    assert 0 in graph.roots() and 1 not in graph.roots()
