@@ -26,7 +26,7 @@ from plansys_bridge.knowledge.evaluation import Evaluator
 from plansys_bridge.knowledge.state import State
 from plansys_bridge.pddl.parser import parse_domain
 from plansys_bridge.planning import graph_builder
-from plansys_bridge.planning.effect_access import condition_vars, effect_access
+from plansys_bridge.planning.effect_access import condition_vars, effect_access, literal_atoms
 from plansys_bridge.planning.happening_order import happening_order
 from plansys_bridge.planning.orderings import GROUND
 from plansys_bridge.planning.plan import Plan, PlanStep
@@ -313,3 +313,37 @@ def test_dependents_of_a_chain_and_a_fork() -> None:
     assert 0 not in deps[1]
     assert graph.roots() == [i for i in range(3) if not graph.start_waits[i]]
     assert 0 in graph.roots() and 1 not in graph.roots()
+
+
+_ATOMS = [f"({p} {s})" for p in ("at", "open", "lit") for s in SPOTS] + [
+    f"(road {a} {b})" for a in SPOTS for b in SPOTS
+]
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.sets(st.sampled_from(_ATOMS)))
+def test_conditions_of_literals_hold_as_the_evaluator_says(true: set[str]) -> None:
+    """The builder checks a condition of ground literals on its atoms' truth values
+    (literal_atoms); in any state that must be what Evaluator.holds says."""
+    k = knowledge_from(
+        DOMAIN,
+        instances=dict.fromkeys(SPOTS, "spot"),
+        facts=sorted(true),
+        functions=["(= (energy) 1)"],
+    )
+    state = k.state()
+    ev = Evaluator(DOMAIN)
+    checked = 0
+    for name, arity in ARITY.items():
+        for args in [(a,) for a in SPOTS] if arity == 1 else [(a, b) for a in SPOTS for b in SPOTS]:
+            g = ev.ground_action(name, args, state)
+            for cond in (g.at_start, g.over_all, g.at_end):
+                atoms = literal_atoms(cond)
+                if atoms is None:
+                    continue
+                by_values = all(a in state for a in atoms[0]) and not any(
+                    a in state for a in atoms[1]
+                )
+                assert by_values == ev.holds(cond, state), (name, args, cond)
+                checked += 1
+    assert checked > 20
