@@ -18,16 +18,17 @@ __all__ = ["happening_order", "point_of", "transitive_reduction"]
 def happening_order(steps: Sequence[PlanStep]) -> list[int]:
     """Every happening of ``steps`` in the order the plan makes them happen: by time
     (rounded to the microsecond), ends of actions with a duration first, then by
-    step, starts before ends. The keys are made in one pass, without a key call
-    per happening."""
-    keys: list[tuple[float, int, int, int]] = []
-    for i, step in enumerate(steps):
-        start = round(step.time, 6)
-        keys.append((start, 1, i, 0))
-        if step.duration <= 0:
-            keys.append((start, 1, i, 1))
-        else:
-            keys.append((round(step.time + step.duration, 6), 0, i, 1))
+    step, starts before ends. The keys are made in two comprehensions, without a
+    key call (or an append) per happening; a step without duration rounds its
+    time once."""
+    starts = [round(step.time, 6) for step in steps]
+    keys = [(start, 1, i, 0) for i, start in enumerate(starts)]
+    keys += [
+        (starts[i], 1, i, 1)
+        if step.duration <= 0
+        else (round(step.time + step.duration, 6), 0, i, 1)
+        for i, step in enumerate(steps)
+    ]
     return [2 * i + point for _, _, i, point in sorted(keys)]
 
 

@@ -347,3 +347,27 @@ def test_conditions_of_literals_hold_as_the_evaluator_says(true: set[str]) -> No
                 assert by_values == ev.holds(cond, state), (name, args, cond)
                 checked += 1
     assert checked > 20
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    st.lists(
+        st.tuples(
+            st.sampled_from([0.0, 0.1, 0.2, 0.3, 1.0000004, 0.9999996, 2.5, 1e-7]),
+            st.sampled_from([0.0, -0.0, 0.1, 0.2, 1.5, 2.0000001]),
+        ),
+        max_size=12,
+    )
+)
+def test_the_happening_order_is_the_plain_sort(times: list[tuple[float, float]]) -> None:
+    """happening_order's comprehensions sort as a key function per happening
+    would: by the time rounded to the microsecond, ends with a duration first,
+    then by step, starts before ends (sums such as 0.1 + 0.2 included)."""
+    steps = [PlanStep(t, "reset", ("s1",), d) for t, d in times]
+
+    def key(h: int) -> tuple[float, int, int, int]:
+        step, end = steps[h // 2], h % 2
+        t = step.time + (step.duration if end and step.duration > 0 else 0.0)
+        return (round(t, 6), 0 if end and step.duration > 0 else 1, h // 2, end)
+
+    assert happening_order(steps) == sorted(range(2 * len(steps)), key=key)
