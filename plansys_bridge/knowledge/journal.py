@@ -132,16 +132,63 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
         """``discard_many(gone)`` then ``set_many(came, value)`` as one step, all or
         nothing, that leaves the log as it was: for a change complete in itself,
         which nothing will undo or scan later. Returns (keys that went, keys that
-        were not there)."""
-        mark = len(self._log)
+        were not there).
+
+        Why it logs nothing: the executor swaps an effect's facts twice per action,
+        and the log entries ``discard_many`` and ``set_many`` write would be dropped
+        at once. What a failure half way must put back is kept in local dicts
+        instead (written with subscripts, no method call per key)."""
+        data, seq = self._data, self._seq
+        removed: dict[K, None] = {}
+        new: dict[K, None] = {}
+        lost: dict[K, tuple[V, int]] = {}  # removed keys: their value and place
+        overwritten: dict[K, V] = {}  # keys there already that get ``value``
+        nxt = self._next
+        writes = 0
         try:
-            removed = self.discard_many(gone) if gone else {}
-            new = self.set_many(came, value) if came else {}
+            for key in gone:
+                if key in data:
+                    lost[key] = (data[key], seq[key])
+                    del data[key]
+                    del seq[key]
+                    removed[key] = None
+                    writes += 1
+            for key in came:
+                writes += 1
+                if key in data:
+                    old = data[key]
+                    if old is not value:
+                        if key not in overwritten:
+                            overwritten[key] = old
+                        data[key] = value
+                else:
+                    data[key] = value
+                    seq[key] = nxt
+                    nxt += 1
+                    new[key] = None
         except BaseException:
-            self.undo(mark)
+            self._put_back(new, overwritten, lost)
             raise
-        del self._log[mark:]
+        self._next = nxt
+        self.writes += writes
         return removed, new
+
+    def _put_back(
+        self, new: dict[K, None], overwritten: dict[K, V], lost: dict[K, tuple[V, int]]
+    ) -> None:
+        """Undo a :meth:`swap` that failed half way, insertion order included."""
+        data, seq = self._data, self._seq
+        self.writes += 1
+        for key in new:
+            data.pop(key, None)
+            seq.pop(key, None)
+        for key, old in overwritten.items():
+            data[key] = old
+        for key, (old, place) in lost.items():
+            data[key] = old
+            seq[key] = place
+        if lost:
+            self._data = {k: data[k] for k in sorted(data, key=seq.__getitem__)}
 
     def clear(self) -> None:
         for key in list(self._data):

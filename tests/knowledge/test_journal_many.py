@@ -68,3 +68,45 @@ def test_a_swap_that_fails_half_way_puts_everything_back() -> None:
     with pytest.raises(RuntimeError, match="broken iterator"):
         table.swap(["a", "c"], Broken(["d", "e"]), 9)
     assert list(table.items()) == start and table.mark() == mark
+
+
+class _Breaks(list[str]):
+    """A list whose iteration fails after ``after`` keys."""
+
+    def __init__(self, keys: list[str], after: int) -> None:
+        super().__init__(keys)
+        self.after = after
+
+    def __iter__(self) -> Iterator[str]:
+        for i, key in enumerate(list.__iter__(self)):
+            if i == self.after:
+                raise RuntimeError("broken half way")
+            yield key
+
+
+@given(
+    before=_KEYS,
+    gone=_KEYS,
+    came=_KEYS,
+    where=st.integers(0, 8),
+    in_came=st.booleans(),
+    value=st.integers(0, 2),
+)
+def test_a_swap_failing_anywhere_leaves_the_table_as_it_was(
+    before: list[str], gone: list[str], came: list[str], where: int, in_came: bool, value: int
+) -> None:
+    table = _table(before)
+    table.forget_log()
+    start = list(table.items())
+    broken_gone = gone if in_came else _Breaks(gone, where)
+    broken_came = _Breaks(came, where) if in_came else came
+    if where >= len(broken_came if in_came else broken_gone):
+        table.swap(broken_gone, broken_came, value)  # never breaks: a plain swap
+        return
+    with pytest.raises(RuntimeError, match="broken half way"):
+        table.swap(broken_gone, broken_came, value)
+    assert list(table.items()) == start and table.mark() == 0
+    # and the table still works as one: the same as a fresh copy after a swap
+    fresh = _table(before)
+    assert table.swap(gone, came, value) == fresh.swap(gone, came, value)
+    assert list(table.items()) == list(fresh.items())
