@@ -22,7 +22,7 @@ from plansys_bridge.knowledge.journal import JournaledTable
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import Atom, Condition
 
-__all__ = ["AppliedEffect", "ChangeTracker", "KnowledgeChange", "applied_effect"]
+__all__ = ["AppliedEffect", "ChangeTracker", "FactChange", "KnowledgeChange", "applied_effect"]
 
 log = logging.getLogger("plansys_bridge.knowledge.problem_expert")
 
@@ -79,6 +79,44 @@ def applied_effect(
         tuple(dict.fromkeys([d for d in deletes if d not in add_set and d in state])),
         tuple([(k, state.value(*k), v) for k, v in updates.items() if state.value(*k) != v]),
     )
+
+
+def _net(
+    removed: dict[Atom, None], added: dict[Atom, None]
+) -> tuple[dict[Atom, None], dict[Atom, None]]:
+    """What went and what came, net: a fact deleted and added again was there
+    before and after, so it is in neither."""
+    if removed and added:
+        again = removed.keys() & added.keys()
+        if again:
+            removed = {k: None for k in removed if k not in again}
+            added = {k: None for k in added if k not in again}
+    return removed, added
+
+
+class FactChange:
+    """An effect of facts only, admitted, with what applying it reports in the
+    usual case, worked out once.
+
+    Why: a ground action's effects are applied once per step and plans repeat
+    ground actions; nearly always every fact the effect deletes is there and
+    every fact it adds is not. Then what the fact table reports equals
+    ``swapped`` and the net change, the notice's sets (built from dicts, in the
+    order the short way builds them) and the :class:`AppliedEffect` are those
+    kept here, which are immutable and handed out again instead of being made
+    anew."""
+
+    __slots__ = ("added_facts", "adds", "applied", "deletes", "effect", "removed_facts", "swapped")
+
+    def __init__(self, effect: object, deletes: list[Atom], adds: list[Atom]) -> None:
+        self.effect = effect
+        self.deletes = deletes
+        self.adds = adds
+        self.swapped = (dict.fromkeys(deletes), dict.fromkeys(adds))
+        removed, added = _net(*self.swapped)
+        self.applied = AppliedEffect(tuple(added), tuple(removed), ())
+        self.added_facts: frozenset[Atom] = frozenset(added) if added else _NONE
+        self.removed_facts: frozenset[Atom] = frozenset(removed) if removed else _NONE
 
 
 class _Mark(NamedTuple):
@@ -184,10 +222,11 @@ class ChangeTracker:
         )
 
     def _replace_facts(
-        self, deletes: list[Atom], adds: list[Atom], reason: str
-    ) -> tuple[dict[Atom, None], dict[Atom, None]]:
+        self, deletes: list[Atom], adds: list[Atom], reason: str, known: FactChange | None = None
+    ) -> AppliedEffect:
         """Delete then add facts (admitted already) as one change of its own, outside
-        any transaction (the lock held).
+        any transaction (the lock held), and say what changed, net, in the effect's
+        order.
 
         Why: the executor applies two effects per action, and this is what nearly
         all of them do. The tables, state, version and notice are those the same
@@ -195,19 +234,24 @@ class ChangeTracker:
         writes report instead of a scan of three logs afterwards. The notice's sets
         are built from dicts in the order the scan finds them, as the scan does (a
         frozenset built from a dict is sized for it at once, so its iteration order
-        differs from one built from a list). Returns the facts that went and the
-        facts that came, net, in the effect's order.
+        differs from one built from a list). ``known``, the same facts prepared
+        before, gives the sets and the answer ready-made when the table reports
+        what it expects (see :class:`FactChange`).
         """
         state = self._state.with_facts(deletes, adds)  # touches nothing
-        removed, added = self._facts.swap(deletes, adds, None)  # all or nothing
+        swapped = self._facts.swap(deletes, adds, None)  # all or nothing
         self._state = self._published = state
-        if removed and added:  # deleted, then added again: there before and after
-            again = removed.keys() & added.keys()
-            if again:
-                removed = {k: None for k in removed if k not in again}
-                added = {k: None for k in added if k not in again}
-        if not (added or removed):
-            return removed, added
+        if known is not None and swapped == known.swapped:
+            applied = known.applied
+            added_facts = known.added_facts
+            removed_facts = known.removed_facts
+        else:
+            removed, added = _net(*swapped)
+            applied = tuple.__new__(AppliedEffect, (tuple(added), tuple(removed), ()))
+            added_facts = frozenset(added) if added else _NONE
+            removed_facts = frozenset(removed) if removed else _NONE
+        if not (added_facts or removed_facts):
+            return applied
         self.version += 1
         # KnowledgeChange._made, inlined (two of these per executed action)
         change = object.__new__(KnowledgeChange)
@@ -216,16 +260,21 @@ class ChangeTracker:
             reason=reason,
             added_instances={},
             removed_instances={},
-            added_facts=frozenset(added) if added else _NONE,
-            removed_facts=frozenset(removed) if removed else _NONE,
+            added_facts=added_facts,
+            removed_facts=removed_facts,
             changed_fluents={},
             removed_fluents=_NONE,
             goal_changed=False,
             goal=self._goal,
             state=state,
         )
-        self._notify(change)
-        return removed, added
+        # _notify, inlined
+        for callback in list(self._subscribers):
+            try:
+                callback(change)
+            except Exception:  # a broken subscriber must not break the knowledge
+                log.exception("knowledge subscriber %r failed", callback)
+        return applied
 
     def _notify(self, change: KnowledgeChange) -> None:
         for callback in list(self._subscribers):

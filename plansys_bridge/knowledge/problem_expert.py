@@ -26,6 +26,7 @@ from plansys_bridge.knowledge.admission import Admission
 from plansys_bridge.knowledge.changes import (
     AppliedEffect,
     ChangeTracker,
+    FactChange,
     KnowledgeChange,
     applied_effect,
 )
@@ -72,10 +73,10 @@ class ProblemExpert(ChangeTracker):
         self._constants = self.domain_expert.constants
         super().__init__(self._constants)
         self._admit = Admission(self.domain_expert, self._object_type)
-        self._applied: dict[int, tuple[Effect, list[Atom], list[Atom]]] = {}
-        """Effects of facts only applied before: (effect, admitted deletes, admitted
-        adds) by the effect's id, for as long as the objects do not change (the
-        instance table's write count is ``_applied_at``)."""
+        self._applied: dict[int, FactChange] = {}
+        """Effects of facts only applied before, their facts admitted, by the
+        effect's id, for as long as the objects do not change (the instance table's
+        write count is ``_applied_at``)."""
         self._applied_at = -1
 
     # ================================================================ validation
@@ -444,9 +445,8 @@ class ProblemExpert(ChangeTracker):
                 except KeyError:
                     pass
                 else:
-                    if known[0] is effect and not self._depth:
-                        removed, added = self._replace_facts(known[1], known[2], "apply")
-                        return tuple.__new__(AppliedEffect, (tuple(added), tuple(removed), ()))
+                    if known.effect is effect and not self._depth:
+                        return self._replace_facts(known.deletes, known.adds, "apply", known)
                 plain = self.evaluator.plain_changes(effect)
             adds: Sequence[Atom]
             deletes: Sequence[Atom]
@@ -462,9 +462,10 @@ class ProblemExpert(ChangeTracker):
                 self._admit.fluent(*key)
             if not updates and not self._depth:
                 if plain is not None and len(self._applied) < _APPLIED_LIMIT:
-                    self._applied[id(effect)] = (effect, checked_deletes, checked_adds)
-                removed, added = self._replace_facts(checked_deletes, checked_adds, "apply")
-                return tuple.__new__(AppliedEffect, (tuple(added), tuple(removed), ()))
+                    known = FactChange(effect, checked_deletes, checked_adds)
+                    self._applied[id(effect)] = known
+                    return self._replace_facts(checked_deletes, checked_adds, "apply", known)
+                return self._replace_facts(checked_deletes, checked_adds, "apply")
             applied = applied_effect(self._state, checked_adds, checked_deletes, updates)
             with self._change("apply"):
                 self._facts.discard_many(checked_deletes)
