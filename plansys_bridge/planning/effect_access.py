@@ -223,7 +223,7 @@ def fixed_condition_vars(cond: Condition) -> set[Var] | None:
         kind = type(node)
         if kind is Atom:
             args = node.args  # type: ignore[union-attr]
-            if type(args) is not tuple or any(a[:1] == "?" for a in args):
+            if type(args) is not tuple or _variable_in(args):
                 return None
             # the atom itself: equal, with the same hash, to the evaluator's new one
             (pos if positive else neg).add(node)  # type: ignore[arg-type]
@@ -234,7 +234,7 @@ def fixed_condition_vars(cond: Condition) -> set[Var] | None:
         elif kind is Compare:
             for n in iter_nodes(node):
                 if type(n) is FluentRef:
-                    if type(n.args) is not tuple or any(a[:1] == "?" for a in n.args):
+                    if type(n.args) is not tuple or _variable_in(n.args):
                         return None
                     fluents.add((n.name, n.args))
         elif kind is not Equals:
@@ -242,6 +242,15 @@ def fixed_condition_vars(cond: Condition) -> set[Var] | None:
     out: set[Var] = {("a", atom) for atom in pos | neg}
     out |= {("f", key) for key in fluents}
     return out
+
+
+def _variable_in(args: tuple[str, ...]) -> bool:
+    """Whether an argument is a variable (a loop: ``any()`` of a generator is a
+    call per argument)."""
+    for a in args:  # noqa: SIM110
+        if a[:1] == "?":
+            return True
+    return False
 
 
 def literal_atoms(cond: Condition) -> tuple[tuple[Atom, ...], tuple[Atom, ...]] | None:
@@ -267,7 +276,7 @@ def literal_atoms(cond: Condition) -> tuple[tuple[Atom, ...], tuple[Atom, ...]] 
         if kind is not Atom:
             return None
         args = node.args  # type: ignore[union-attr]
-        if type(args) is not tuple or any(a[:1] == "?" for a in args):
+        if type(args) is not tuple or _variable_in(args):
             return None
         (pos if positive else neg).append(node)  # type: ignore[arg-type]
     return tuple(pos), tuple(neg)
@@ -292,13 +301,13 @@ def _fixed_effect_parts(
             continue
         if kind is NumericEffect:
             ref: FluentRef = node.fluent  # type: ignore[union-attr]
-            if type(ref.args) is not tuple or any(a[:1] == "?" for a in ref.args):
+            if type(ref.args) is not tuple or _variable_in(ref.args):
                 return None
             fluents.add((ref.name, ref.args))
             numeric.append(node)  # type: ignore[arg-type]
             continue
         atom: Atom = node.atom  # type: ignore[union-attr]
-        if type(atom.args) is not tuple or any(a[:1] == "?" for a in atom.args):
+        if type(atom.args) is not tuple or _variable_in(atom.args):
             return None
         if type(atom) is not Atom:
             atom = Atom(atom.predicate, atom.args)

@@ -352,10 +352,11 @@ class GraphBuilder:
         if fixed:
             setattr(m, part, found)
             atoms = literal_atoms(cond)
-            if atoms is not None:
+            if atoms is not None:  # every atom read has its history by now
+                kept = self._atoms
                 lits = (
-                    tuple([history(("a", a)) for a in atoms[0]]),
-                    tuple([history(("a", a)) for a in atoms[1]]),
+                    tuple([kept[a.predicate, a.args] for a in atoms[0]]),
+                    tuple([kept[a.predicate, a.args] for a in atoms[1]]),
                 )
                 setattr(m, part + "_lits", lits)
             if part == "over":
