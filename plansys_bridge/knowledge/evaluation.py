@@ -116,10 +116,13 @@ class Evaluator(Reasoner):
         A ground atom or conjunction of ground atoms (the executor's requirements)
         is looked up in the state directly: its facts are listed once per condition
         (see :meth:`_plain`), and the plan graph and the executor ask about the
-        same conditions again and again."""
+        same conditions again and again. The empty conjunction (``TRUE``, what a
+        ground action without a condition has) holds at once."""
         if bindings:
             b = normalize_bindings(bindings)
         else:
+            if cond.__class__ is And and not cond.operands:
+                return True
             try:
                 entry = self._plain_facts[id(cond)]
             except KeyError:

@@ -240,7 +240,16 @@ class State:
         if emptied:
             for pred in [p for p, tuples in new_index.items() if not tuples]:
                 del new_index[pred]
-        return State._build(new_index, self._fluents, self._objects, self._object_cache)
+        # State._build, inlined (two of these per executed action)
+        state = State.__new__(State)
+        state._index = new_index
+        state._facts = None
+        state._fluents = self._fluents
+        state._flat = None
+        state._objects = self._objects
+        state._cache = {}
+        state._object_cache = self._object_cache
+        return state
 
     @staticmethod
     def _build(

@@ -254,3 +254,20 @@ def test_has_all_is_every_fact() -> None:
     assert state.has_all([("p", ("a",)), ("q", ("a", "b"))]) and state.has_all([])
     assert not state.has_all([("p", ("a",)), ("q", ("b", "a"))])
     assert not state.has_all([("nothing", ())])
+
+
+@given(state=STATES)
+def test_the_empty_conjunction_holds_at_once(state: State) -> None:
+    """TRUE (a ground action without a condition) holds in every state, answered
+    before any look-up; with bindings it goes the way it went (bad ones still fail)."""
+    ev = Evaluator(DOMAIN)
+    for empty in (And(()), And(())):  # each ground action makes its own
+        assert ev.holds(empty, state) is True
+        assert ev._holds(empty, {}, EvalContext(ev, state, None)) is True
+    assert ev._plain_facts == {}  # answered before the per-condition memory
+    assert ev.holds(And(()), state, {"x": "a"}) is True
+    bad = {"x": 3}  # not a name: normalising the bindings fails, as for any condition
+    assert _outcome(lambda: ev.holds(And(()), state, bad)) == _outcome(
+        lambda: ev.holds(Atom("p", ("a",)), state, bad)
+    )
+    assert _outcome(lambda: ev.holds(And(()), state, bad))[0] == "AttributeError"
