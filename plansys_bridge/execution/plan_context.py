@@ -29,7 +29,7 @@ from plansys_bridge.knowledge.evaluation import Evaluator, GroundAction
 from plansys_bridge.knowledge.state import State
 from plansys_bridge.pddl.model import Atom, Condition, FluentRef
 from plansys_bridge.pddl.walkers import Collector
-from plansys_bridge.planning.orderings import END, GROUND, START, Point
+from plansys_bridge.planning.orderings import GROUND, START, Point
 from plansys_bridge.planning.plan import PlanStep
 from plansys_bridge.planning.plan_graph import PlanGraph
 from plansys_bridge.planning.requirement_text import describe_unmet
@@ -144,13 +144,9 @@ class PlanContext:
         self.tasks: set[asyncio.Future[Any]] = set()
         """What runs for the plan (auction clients' outcome futures, tasks): the
         executor cancels and awaits them when the plan ends."""
-        self.dependents: list[set[int]] = [set() for _ in self.actions]
+        self.dependents: list[set[int]] = graph.dependents()
         """For each action, the actions with a start or end wait on it."""
-        for i in range(len(self.actions)):
-            for point in (START, END):
-                for j, _ in graph.waits(i, point):
-                    self.dependents[j].add(i)
-        self.active: set[int] = {i for i in range(len(self.actions)) if not graph.waits(i, START)}
+        self.active: set[int] = set(graph.roots())
         """Branches worth ticking: not parked waiting for a predecessor."""
         self.resting: set[int] = set()
         """Branches whose performer works and that nothing has touched since."""
