@@ -375,13 +375,16 @@ class GraphBuilder:
         if access is None:
             access = effect_access(self.ev, effect, self._state(), fixed)
         history = self._history
+        # each variable written is looked up once (the written, added and deleted
+        # ones are all among the writes)
+        of = {var: history(var) for var, _ in access.writes}
         found = (
             access,
             tuple(map(history, access.read)),
-            tuple([(history(var), kind) for var, kind in access.writes]),
-            tuple(map(history, access.written)),
-            tuple([history(("a", atom)) for atom in access.adds]),
-            tuple([history(("a", atom)) for atom in access.deleted]),
+            tuple([(of[var], kind) for var, kind in access.writes]),
+            tuple([of[var] for var in access.written]),
+            tuple([of["a", atom] for atom in access.adds]),
+            tuple([of["a", atom] for atom in access.deleted]),
         )
         if fixed:
             setattr(m, part, found)
