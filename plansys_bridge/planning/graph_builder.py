@@ -12,8 +12,9 @@ ground action's start, over-all and end read and write is worked out once per
 ground action (when it is the same in every state, see
 :func:`~plansys_bridge.planning.effect_access.reads_fixed`), and each happening
 then records all its accesses in one call whose loops do the common atom cases
-inline. Conditions or effects that depend on the state take the general way at
-every happening.
+inline. Atoms keep their truth values in their histories: a condition of literals
+is checked, and a plain effect applied, on those, and a State is made only when the
+evaluator needs one. What depends on the state takes the general way each time.
 """
 
 from __future__ import annotations
