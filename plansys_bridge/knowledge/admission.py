@@ -56,7 +56,7 @@ class Admission:
                 )
 
     def fact(self, atom: Atom) -> Atom:
-        atom = Atom(atom.predicate.lower(), tuple(a.lower() for a in atom.args))
+        atom = Atom(atom.predicate.lower(), tuple([a.lower() for a in atom.args]))
         pdef = self.domain_expert.get_predicate(atom.predicate)
         if pdef is None:
             raise KnowledgeError(f"predicate {atom}: unknown predicate {atom.predicate!r}")

@@ -156,10 +156,16 @@ class Evaluator(Reasoner):
                 type(part) is not Atom
                 or part.predicate in self._derived_rules
                 or type(part.args) is not tuple
-                or not all(type(a) is str and a[:1] != "?" for a in part.args)
             ):
                 break
-            facts.append((part.predicate, part.args))
+            # a loop, not all() of a generator (a call per argument)
+            for a in part.args:
+                if type(a) is not str or a[:1] == "?":
+                    break
+            else:
+                facts.append((part.predicate, part.args))
+                continue
+            break
         entry = (cond, tuple(facts) if len(facts) == len(parts) else None)
         if len(self._plain_facts) > CACHE_LIMIT:
             self._plain_facts.clear()
