@@ -23,8 +23,7 @@ from plansys_bridge.knowledge.grounding import (
     UnboundVariableError,
     ground_args,
     normalize_bindings,
-    substitute_condition,
-    substitute_effect,
+    substitution,
 )
 from plansys_bridge.knowledge.joins import CACHE_LIMIT
 from plansys_bridge.knowledge.plan_atoms import AtomWalker, effect_atoms
@@ -327,13 +326,19 @@ class Evaluator(Reasoner):
                 f"({' '.join((act.name, *arguments))})"
             )
         if state is not None:
+            objects = state.objects
+            is_subtype = self.types.is_subtype
             for param, arg in zip(act.parameters, arguments, strict=True):
-                obj_type = state.objects.get(arg)
+                obj_type = objects.get(arg)
                 if obj_type is None:
                     raise KnowledgeError(
                         f"action ({act.name} {' '.join(arguments)}): unknown object {arg!r}"
                     )
-                if not self.types.is_subtype_of_any((obj_type,), param.types):
+                # types.is_subtype_of_any((obj_type,), param.types), as a loop
+                for wanted in param.types:
+                    if is_subtype(obj_type, wanted):
+                        break
+                else:
                     raise KnowledgeError(
                         f"action ({act.name} {' '.join(arguments)}): {arg} is a {obj_type}, "
                         f"parameter {param.name} wants {' or '.join(param.types)}"
@@ -354,16 +359,17 @@ class Evaluator(Reasoner):
         """
         act, b = self.bind(action, args, state)
         arguments = tuple(b.values())
+        sub = substitution(b)  # one substitution for the five parts
         if isinstance(act, Action):
             return GroundAction(
                 name=act.name,
                 args=arguments,
                 bindings=b,
                 at_start=TRUE,
-                over_all=substitute_condition(act.precondition, b),
+                over_all=sub(act.precondition),
                 at_end=TRUE,
                 start_effect=NO_EFFECT,
-                end_effect=substitute_effect(act.effect, b),
+                end_effect=sub(act.effect),
                 duration=None,
                 durative=False,
                 action=act,
@@ -372,11 +378,11 @@ class Evaluator(Reasoner):
             name=act.name,
             args=arguments,
             bindings=b,
-            at_start=substitute_condition(act.at_start, b),
-            over_all=substitute_condition(act.over_all, b),
-            at_end=substitute_condition(act.at_end, b),
-            start_effect=substitute_effect(act.start_effect, b),
-            end_effect=substitute_effect(act.end_effect, b),
+            at_start=sub(act.at_start),
+            over_all=sub(act.over_all),
+            at_end=sub(act.at_end),
+            start_effect=sub(act.start_effect),
+            end_effect=sub(act.end_effect),
             duration=self._duration(act, b, state),
             durative=True,
             action=act,
