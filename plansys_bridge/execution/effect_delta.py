@@ -7,13 +7,11 @@ it: another action may have changed the same facts since.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from plansys_bridge.knowledge.evaluation import Evaluator
-from plansys_bridge.knowledge.state import FluentKey, State
-from plansys_bridge.pddl.model import Atom, Effect, FluentRef, FluentValue
+from plansys_bridge.knowledge.state import FluentKey
+from plansys_bridge.pddl.model import Atom, FluentRef, FluentValue
 
 if TYPE_CHECKING:
     from plansys_bridge.knowledge.problem_expert import ProblemExpert
@@ -29,32 +27,6 @@ class EffectDelta:
     deleted: tuple[Atom, ...] = ()
     fluents: tuple[tuple[FluentKey, float | None, float], ...] = ()
     """(key, old value or None, new value)."""
-
-    @classmethod
-    def of(
-        cls,
-        evaluator: Evaluator,
-        effect: Effect,
-        state: State,
-        bindings: Mapping[str, str],
-        duration: float | None,
-    ) -> EffectDelta:
-        """What ``effect`` changes in ``state``; the evaluator keeps its answer for
-        the knowledge's ``apply`` of the same effect on the same snapshot, which
-        usually follows at once (the effect is worked out once, not twice)."""
-        adds, deletes, updates = evaluator.changes(effect, state, bindings, duration, keep=True)
-        if not (adds or deletes or updates):
-            return cls()
-        add_set = set(adds)
-        return cls(
-            added=tuple([a for a in add_set if a not in state]) if adds else (),
-            deleted=tuple([d for d in set(deletes) - add_set if d in state]) if deletes else (),
-            fluents=tuple(
-                [(k, state.value(*k), v) for k, v in updates.items() if state.value(*k) != v]
-            )
-            if updates
-            else (),
-        )
 
     @property
     def empty(self) -> bool:

@@ -82,12 +82,11 @@ class ActionRuntime:
     may_rest: bool = False
     """The branch is the standard subtree: while its performer works it needs a tick
     only when the performer ends, a deadline passes or what its over-all reads changes."""
-    text: str = ""
-    """The step's text, ``(move r1 a b)``: kept, as records and every info carry it."""
 
-    def __post_init__(self) -> None:
-        if not self.text:
-            self.text = self.step.text
+    @property
+    def text(self) -> str:
+        """The step's text, ``(move r1 a b)`` (kept by the step)."""
+        return self.step.text
 
 
 class PlanContext:
@@ -130,7 +129,7 @@ class PlanContext:
                 planned_duration=step.duration,
                 request_id=f"{plan_id}/{plan_index}/{i}",
             )
-            self.actions.append(ActionRuntime(i, step, ground, record, text=record.text))
+            self.actions.append(ActionRuntime(i, step, ground, record))
         self.draining = False
         """Set on the first failure: no further action starts."""
         self.cancelled = False

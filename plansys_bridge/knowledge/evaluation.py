@@ -13,7 +13,6 @@ per module: :mod:`.reasoner` (what each construct means), :mod:`.joins`
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping, Sequence
-from typing import NamedTuple
 
 from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.knowledge.context import EvalContext, EvaluationError, UndefinedFluentError
@@ -77,25 +76,12 @@ def _plain_changes(effect: Effect) -> tuple[list[Atom], list[Atom]] | None:
     return adds, deletes
 
 
-class _Kept(NamedTuple):
-    """An answer of :meth:`Evaluator.changes` kept for the next call with the same question."""
-
-    effect: Effect
-    state: State
-    bindings: dict[str, str]
-    duration: float | None
-    adds: list[Atom]
-    deletes: list[Atom]
-    updates: dict[FluentKey, float]
-
-
 class Evaluator(Reasoner):
     """Evaluates conditions and applies effects of one domain (see module docs)."""
 
     def __init__(self, domain: Domain) -> None:
         super().__init__(domain)
         self._actions: dict[str, AnyAction] = {a.name: a for a in domain.actions}
-        self._kept: _Kept | None = None
         self._plain_facts: dict[int, tuple[Condition, tuple[tuple[str, Args], ...] | None]] = {}
         self._plain_effects: dict[
             int, tuple[Effect, tuple[tuple[Atom, ...], tuple[Atom, ...]] | None]
@@ -224,35 +210,17 @@ class Evaluator(Reasoner):
         state: State,
         bindings: Mapping[str, str] | None = None,
         duration: float | None = None,
-        *,
-        keep: bool = False,
     ) -> tuple[list[Atom], list[Atom], dict[FluentKey, float]]:
         """What ``effect`` would do: (adds, deletes, new fluent values), nothing applied.
 
-        ``keep=True`` keeps the answer for the next call with the same effect and
-        snapshot (compared by identity; both are immutable), bindings and duration,
-        which gets it without working it out again: the executor works out what an
-        at-start effect changes (to undo it if the action is halted) and then has
-        the knowledge apply it. The kept answer is handed over once and dropped;
-        whoever keeps it must not change the lists it got. An effect of ground
-        facts only needs no keeping: its changes are worked out once per effect
-        object (see :meth:`plain_changes`) and handed out as new lists each time.
+        An effect of ground facts only is worked out once per effect object (see
+        :meth:`plain_changes`) and handed out as new lists each time.
         """
         if not bindings:
             plain = self.plain_changes(effect)
-            if plain is not None:  # the same answer in every state: nothing to keep
+            if plain is not None:  # the same answer in every state
                 return list(plain[0]), list(plain[1]), {}
         b = normalize_bindings(bindings) if bindings else {}
-        kept = self._kept
-        if (
-            kept is not None
-            and kept.effect is effect
-            and kept.state is state
-            and kept.duration == duration
-            and kept.bindings == b
-        ):
-            self._kept = None
-            return kept.adds, kept.deletes, kept.updates
         ctx = EvalContext(self, state, duration)
         gathered = Changes()
         self._collect(effect, b, ctx, gathered)
@@ -276,8 +244,6 @@ class Evaluator(Reasoner):
                 if val == 0:
                     raise EvaluationError(f"scale-down of {fluent_text(key)} by zero")
                 updates[key] = current / val
-        if keep:
-            self._kept = _Kept(effect, state, b, duration, gathered.adds, gathered.deletes, updates)
         return gathered.adds, gathered.deletes, updates
 
     def satisfying_bindings(

@@ -422,9 +422,7 @@ class ProblemExpert(ChangeTracker):
         when the action is halted (worked out here, where it is known anyway,
         instead of from a snapshot read before).
 
-        What the effect does is worked out by the evaluator, which hands over what
-        it found for the same effect and snapshot a moment ago (the executor works
-        out an at-start effect's delta just before applying it). Everything is
+        What the effect does is worked out by the evaluator. Everything is
         checked before anything changes; an effect of facts only, outside a
         transaction, then takes the short way (:meth:`_replace_facts`).
 

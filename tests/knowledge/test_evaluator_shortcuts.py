@@ -27,7 +27,6 @@ from plansys_bridge.pddl.model import (
     FluentRef,
     Not,
     Number,
-    NumericEffect,
     WhenEffect,
 )
 from plansys_bridge.pddl.parser import parse_domain
@@ -200,53 +199,6 @@ def test_facts_only_effects_skip_the_walk(monkeypatch: pytest.MonkeyPatch) -> No
     when = WhenEffect(Atom("p", ("a",)), AddEffect(Atom("p", ("b",))))
     ev.changes(when, state)
     assert walked == [when]
-
-
-NUMERIC = AndEffect(
-    (
-        DeleteEffect(Atom("p", ("a",))),
-        NumericEffect("increase", FluentRef("level", ("a",)), Number(2.0)),
-    )
-)
-
-
-@pytest.mark.parametrize(
-    "effect", [NUMERIC, AndEffect((WhenEffect(Atom("p", ("a",)), AddEffect(Atom("p", ("b",)))),))]
-)
-def test_kept_changes_are_handed_over_once(effect: Effect, monkeypatch: pytest.MonkeyPatch) -> None:
-    ev = Evaluator(DOMAIN)
-    state = State([Atom("p", ("a",))], {("level", ("a",)): 1.0}, OBJECTS)
-    worked: list[int] = []  # one entry each time the changes are worked out, either way
-    plain = evaluation._plain_changes
-    collect = ev._collect
-
-    def plain_counted(effect: Effect) -> Any:
-        worked.append(1)
-        return plain(effect)
-
-    def collect_counted(*args: Any) -> None:
-        worked.append(1)
-        collect(*args)
-
-    monkeypatch.setattr(evaluation, "_plain_changes", plain_counted)
-    monkeypatch.setattr(ev, "_collect", collect_counted)
-    first = ev.changes(effect, state, {}, 4.0, keep=True)
-    once = len(worked)
-    assert ev.changes(effect, state, None, 4.0) == first and len(worked) == once
-    again = ev.changes(effect, state, None, 4.0)  # handed over once: worked out anew
-    assert again == first and again[0] is not first[0] and len(worked) > once
-    # a different snapshot, duration or bindings is a different question
-    ev.changes(effect, state, {}, 4.0, keep=True)
-    other_state = State([Atom("p", ("a",))], {("level", ("a",)): 1.0}, OBJECTS)
-    others: list[tuple[State, dict[str, str] | None, float]] = [
-        (other_state, None, 4.0),
-        (state, None, 5.0),
-        (state, {"x": "a"}, 4.0),
-    ]
-    for snapshot, bindings, duration in others:
-        before = len(worked)
-        assert ev.changes(effect, snapshot, bindings, duration) == first
-        assert len(worked) > before
 
 
 def test_has_all_is_every_fact() -> None:
