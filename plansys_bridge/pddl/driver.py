@@ -23,6 +23,7 @@ from lark import Lark, Token
 from lark.exceptions import UnexpectedToken
 from lark.parsers.lalr_analysis import Shift
 
+from plansys_bridge.errors import PddlError
 from plansys_bridge.pddl.lexer import PddlLexer
 
 Reduce = tuple[int, Callable[[list[Any]], Any], str]
@@ -46,9 +47,7 @@ class LalrDriver:
                 else:
                     row[symbol] = (len(arg.expansion), callbacks[arg], arg.origin.name)
             self.table[state] = row
-        lexer = lark.parser.lexer
-        assert isinstance(lexer, PddlLexer)
-        self.lexer = lexer
+        self.lexer = _pddl_lexer(lark.parser.lexer)
 
     def parse(self, text: str, start: str) -> Any:
         table = self.table
@@ -97,3 +96,16 @@ class LalrDriver:
             stack.append(table[stack[-1]][origin])  # type: ignore[arg-type]
             if stack[-1] == end_state:
                 return values[-1]
+
+
+def _pddl_lexer(lexer: object) -> PddlLexer:
+    """Our lexer inside lark's front end.
+
+    Why: lark 1.1 keeps a lexer class of ``__future_interface__ = True`` as it is;
+    lark 1.2 and later wrap it in an adapter that holds it as ``.lexer``. Both are
+    within the versions the project accepts (lark < 2)."""
+    inner = getattr(lexer, "lexer", None)
+    for candidate in (lexer, inner):
+        if isinstance(candidate, PddlLexer):
+            return candidate
+    raise PddlError(f"lark built the parser with {type(lexer).__name__}, not PddlLexer")

@@ -70,9 +70,12 @@ class PddlLexer(Lexer):
         assert self.keywords["-"] == "MINUS"
 
     def lex(self, lexer_state: LexerState, parser_state: Any) -> Iterator[Token]:
-        return self.tokens(
-            lexer_state.text, parser_state.parse_conf.states, parser_state.state_stack
-        )
+        # lark 1.2 and later hand over a TextSlice (whole text, as checked by lark's
+        # adapter for this interface) where lark 1.1 hands over the str.
+        text = lexer_state.text
+        if not isinstance(text, str):
+            text = text.text
+        return self.tokens(text, parser_state.parse_conf.states, parser_state.state_stack)
 
     def tokens(
         self, text: str, states: Mapping[int, Mapping[str, Any]], stack: list[int]
