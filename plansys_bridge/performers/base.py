@@ -25,20 +25,12 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import math
-from abc import ABC, abstractmethod
+from abc import abstractmethod
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from plansys_bridge.errors import HubError
-from plansys_bridge.hub.messages import (
-    ActionExecution,
-    ExecutionType,
-    PerformerState,
-    Topics,
-    action_execution,
-    performer_statuses,
-)
+from plansys_bridge.hub.messages import ExecutionType, PerformerState, Topics, performer_statuses
 from plansys_bridge.hub.transport import Subscription
 from plansys_bridge.performers.entry import PerformerConfig, construct
 from plansys_bridge.performers.goal import (
@@ -46,12 +38,9 @@ from plansys_bridge.performers.goal import (
     ActionGoal,
     PerformerContext,
     arguments_match,
-    goal_of,
-    last_request,
-    same_goal,
 )
-from plansys_bridge.performers.kind import PerformerKind
 from plansys_bridge.performers.listening import listen
+from plansys_bridge.performers.protocol import PerformerProtocol
 
 if TYPE_CHECKING:
     from plansys_bridge.performers.bid_costs import BidCosts
@@ -67,21 +56,10 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-# Read once: an enum member read off its class costs about 0.3 us on Python 3.11, and
-# every performer compares every auction message it is handed with these.
-_REQUEST = ExecutionType.REQUEST
-_RESPONSE = ExecutionType.RESPONSE
-_CONFIRM = ExecutionType.CONFIRM
-_REJECT = ExecutionType.REJECT
-_CANCEL = ExecutionType.CANCEL
-_RUNNING = PerformerState.RUNNING
-_READY = PerformerState.READY
 _STATUS = Topics.PERFORMERS_STATUS
-_ACTIONS_HUB = Topics.ACTIONS_HUB
-_INF = math.inf
 
 
-class ActionPerformer(PerformerKind, ABC):
+class ActionPerformer(PerformerProtocol):
     """Base class of every performer; subclasses implement :meth:`execute` (and declare
     their mission-file settings as :class:`~plansys_bridge.performers.kind.PerformerKind`
     says)."""
@@ -188,22 +166,6 @@ class ActionPerformer(PerformerKind, ABC):
     def busy(self) -> bool:
         return self._task is not None
 
-    @property
-    def committed(self) -> ActionGoal | None:
-        """The request this performer answered and awaits CONFIRM/REJECT for."""
-        goal = self._committed
-        loop = self._loop
-        if goal is not None and loop is not None and loop.time() >= self._commit_deadline:
-            log.info(
-                "performer %s: no CONFIRM/REJECT for %s within %g s; bidding again",
-                self.node_name,
-                goal.full_name,
-                self.commit_timeout,
-            )
-            self._committed = None
-            return None
-        return goal
-
     async def start(self) -> None:
         """Run ``setup()``, subscribe to the hub and start the heartbeat."""
         if self._running:
@@ -277,183 +239,7 @@ class ActionPerformer(PerformerKind, ABC):
         spec = self.actions.get(goal.action)
         return spec is not None and arguments_match(spec, goal.arguments)
 
-    # ------------------------------------------------------------------ protocol
-
-    def _on_action_msg(self, msg: object) -> None:
-        # The class compared first: isinstance is a call, and every message comes here.
-        if (
-            msg.__class__ is not ActionExecution and not isinstance(msg, ActionExecution)
-        ) or not self._running:
-            return
-        kind = msg.type
-        if kind is _REQUEST:
-            self._on_request(msg)
-        elif msg.node_id != self.node_name:
-            return
-        elif kind is _CONFIRM:
-            self._on_confirm(msg)
-        elif kind is _REJECT:
-            # same_goal and the release, inlined: every bidder but one comes here. The
-            # commitment is read without its deadline: a lapsed one ends here either way.
-            committed = self._committed
-            if committed is not None:
-                rid = msg.request_id
-                if (
-                    not (committed.request_id and rid and committed.request_id != rid)
-                    and committed.action == msg.action
-                    and committed.arguments == tuple(msg.arguments)
-                ):
-                    self._committed = None
-        elif kind is _CANCEL:
-            self._on_cancel_msg(msg)
-
-    def _on_request(self, msg: object) -> None:
-        # Also the subscriber of the REQUEST route keys, so it checks what
-        # _on_action_msg would: an auction message, a REQUEST, the performer running.
-        if (
-            (msg.__class__ is not ActionExecution and not isinstance(msg, ActionExecution))
-            or msg.type is not _REQUEST
-            or not self._running
-        ):
-            return
-        # The cheap refusals come first, read off the message: a busy performer, or
-        # one whose specialised arguments do not fit, builds nothing. The goal itself
-        # is shared by every performer handed the same REQUEST (goal_of).
-        if self._committed is not None:
-            committed = self.committed
-            if committed is not None:
-                if committed == goal_of(msg):
-                    # our RESPONSE may have been lost
-                    self._send(_RESPONSE, committed, bid=self._committed_bid)
-                return
-        if self._task is not None:
-            return
-        if self._own_serves:
-            goal = goal_of(msg)
-            if not self.serves(goal):
-                return
-        else:
-            spec = self.actions.get(msg.action)
-            if spec is None or (spec and not arguments_match(spec, msg.arguments)):
-                return
-            last_msg, goal = last_request[0]  # goal_of's look-up, inlined
-            if last_msg is not msg:
-                goal = goal_of(msg)
-        try:
-            if self._own_accepts and not self.accepts(goal):
-                return
-            learned = self.bid_costs.cost(goal.action, goal.arguments) if self.bid_costs else None
-            cost = learned if learned is not None else self.bid(goal)
-        except Exception:
-            log.exception("performer %s: bid/accepts for %s raised", self.node_name, goal.full_name)
-            return
-        if cost is not None and (cost != cost or cost == _INF):  # NaN or inf
-            return
-        self._committed = goal
-        self._committed_bid = cost
-        loop = self._loop or asyncio.get_running_loop()
-        self._commit_deadline = loop.time() + self.commit_timeout
-        # _respond, inlined: every bidder of every auction comes by
-        self._out(
-            _ACTIONS_HUB,
-            action_execution(
-                _RESPONSE,
-                self.node_name,
-                goal.action,
-                goal.arguments,
-                bid=cost,
-                request_id=goal.request_id,
-            ),
-        )
-
-    def _release_commitment(self) -> None:
-        self._committed = None
-
-    def _on_confirm(self, msg: ActionExecution) -> None:
-        goal = self.committed
-        if goal is None or not same_goal(goal, msg):
-            return  # not (or no longer) committed to this request
-        self._committed = None  # _release_commitment, inlined
-        self.goal = goal
-        self.completion = 0.0
-        self.executed += 1
-        self.state = _RUNNING
-        self._cancelling = False
-        self._task = asyncio.get_running_loop().create_task(
-            self._run_goal(goal), name=f"{self.node_name}:{goal.full_name}"
-        )
-        self._publish_status()
-
-    def _on_cancel_msg(self, msg: ActionExecution) -> None:
-        committed = self.committed
-        if committed is not None and same_goal(committed, msg):
-            self._release_commitment()
-            return
-        goal, task = self.goal, self._task
-        if goal is None or task is None or not same_goal(goal, msg) or self._cancelling:
-            return
-        self._cancelling = True
-        task.cancel()
-
-    async def _run_goal(self, goal: ActionGoal) -> None:
-        try:
-            try:
-                status = await self.execute(goal)
-            except asyncio.CancelledError:
-                if not self._cancelling:
-                    raise
-                await self._after_cancel(goal)
-            except ActionFailed as exc:
-                self._finish(goal, False, str(exc) or "failed")
-            except Exception as exc:
-                log.exception("performer %s: %s raised", self.node_name, goal.full_name)
-                self._finish(goal, False, f"{type(exc).__name__}: {exc}")
-            else:
-                self._finish(goal, True, status if status else "succeeded")
-        finally:
-            self._task = None
-            self.goal = None
-            self._cancelling = False
-            if self._running:
-                self.state = _READY
-                self._publish_status()
-
-    async def _after_cancel(self, goal: ActionGoal) -> None:
-        try:
-            await self.on_cancel(goal)
-        except Exception:
-            log.exception("performer %s: on_cancel(%s) raised", self.node_name, goal.full_name)
-
-    def _finish(self, goal: ActionGoal, success: bool, status: str) -> None:
-        completion = 1.0 if success else self.completion
-        self._send(
-            ExecutionType.FINISH, goal, success=success, completion=completion, status=status
-        )
-
-    def _send(
-        self,
-        kind: ExecutionType,
-        goal: ActionGoal,
-        *,
-        success: bool = False,
-        completion: float = 0.0,
-        status: str = "",
-        bid: float | None = None,
-    ) -> None:
-        self._out(
-            _ACTIONS_HUB,
-            action_execution(
-                kind,
-                self.node_name,
-                goal.action,
-                goal.arguments,
-                success=success,
-                completion=completion,
-                status=status,
-                bid=bid,
-                request_id=goal.request_id,
-            ),
-        )
+    # ------------------------------------------------------------------ outlets
 
     def _publish(self, topic: str, msg: object) -> None:
         """Every message the performer sends goes through here (fault injection hooks it)."""
