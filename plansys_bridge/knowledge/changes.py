@@ -22,11 +22,19 @@ from plansys_bridge.knowledge.journal import JournaledTable
 from plansys_bridge.knowledge.state import FluentKey, State
 from plansys_bridge.pddl.model import Atom, Condition
 
-__all__ = ["AppliedEffect", "ChangeTracker", "FactChange", "KnowledgeChange", "applied_effect"]
+__all__ = [
+    "EMPTY_SET",
+    "AppliedEffect",
+    "ChangeTracker",
+    "KnowledgeChange",
+    "applied_effect",
+    "net_change",
+]
 
 log = logging.getLogger("plansys_bridge.knowledge.problem_expert")
 
-_NONE: frozenset[Any] = frozenset()
+EMPTY_SET: frozenset[Any] = frozenset()
+"""The empty set a notice without such changes holds (one, shared)."""
 
 
 @dataclass(frozen=True)
@@ -81,7 +89,7 @@ def applied_effect(
     )
 
 
-def _net(
+def net_change(
     removed: dict[Atom, None], added: dict[Atom, None]
 ) -> tuple[dict[Atom, None], dict[Atom, None]]:
     """What went and what came, net: a fact deleted and added again was there
@@ -92,31 +100,6 @@ def _net(
             removed = {k: None for k in removed if k not in again}
             added = {k: None for k in added if k not in again}
     return removed, added
-
-
-class FactChange:
-    """An effect of facts only, admitted, with what applying it reports in the
-    usual case, worked out once.
-
-    Why: a ground action's effects are applied once per step and plans repeat
-    ground actions; nearly always every fact the effect deletes is there and
-    every fact it adds is not. Then what the fact table reports equals
-    ``swapped`` and the net change, the notice's sets (built from dicts, in the
-    order the short way builds them) and the :class:`AppliedEffect` are those
-    kept here, which are immutable and handed out again instead of being made
-    anew."""
-
-    __slots__ = ("added_facts", "adds", "applied", "deletes", "effect", "removed_facts", "swapped")
-
-    def __init__(self, effect: object, deletes: list[Atom], adds: list[Atom]) -> None:
-        self.effect = effect
-        self.deletes = deletes
-        self.adds = adds
-        self.swapped = (dict.fromkeys(deletes), dict.fromkeys(adds))
-        removed, added = _net(*self.swapped)
-        self.applied = AppliedEffect(tuple(added), tuple(removed), ())
-        self.added_facts: frozenset[Atom] = frozenset(added) if added else _NONE
-        self.removed_facts: frozenset[Atom] = frozenset(removed) if removed else _NONE
 
 
 class _Mark(NamedTuple):
@@ -192,7 +175,7 @@ class ChangeTracker:
         removed_fluents = (
             frozenset([k for k in fluents_before if k not in self._fluents])
             if fluents_before
-            else _NONE
+            else EMPTY_SET
         )
         added_instances, removed_instances = self._instances.changes_since(start.instances)
         goal_changed = start.goal is not self._goal and start.goal != self._goal
@@ -212,8 +195,8 @@ class ChangeTracker:
             reason=reason,
             added_instances=added_instances,
             removed_instances=removed_instances,
-            added_facts=frozenset(added) if added else _NONE,
-            removed_facts=frozenset(removed) if removed else _NONE,
+            added_facts=frozenset(added) if added else EMPTY_SET,
+            removed_facts=frozenset(removed) if removed else EMPTY_SET,
             changed_fluents=changed_fluents,
             removed_fluents=removed_fluents,
             goal_changed=goal_changed,
@@ -221,60 +204,31 @@ class ChangeTracker:
             state=self._state,
         )
 
-    def _replace_facts(
-        self, deletes: list[Atom], adds: list[Atom], reason: str, known: FactChange | None = None
-    ) -> AppliedEffect:
+    def _swap_facts(
+        self, deletes: list[Atom], adds: list[Atom]
+    ) -> tuple[State, AppliedEffect, frozenset[Atom], frozenset[Atom]]:
         """Delete then add facts (admitted already) as one change of its own, outside
         any transaction (the lock held), and say what changed, net, in the effect's
-        order.
+        order: ``(state, answer, added facts, removed facts)``, the state published,
+        the notice left to the caller (:meth:`EffectApplier.apply`).
 
-        Why: the executor applies two effects per action, and this is what nearly
-        all of them do. The tables, state, version and notice are those the same
-        change makes inside :meth:`_change`, but what moved is what the table's
-        writes report instead of a scan of three logs afterwards. The notice's sets
-        are built from dicts in the order the scan finds them, as the scan does (a
-        frozenset built from a dict is sized for it at once, so its iteration order
-        differs from one built from a list). ``known``, the same facts prepared
-        before, gives the sets and the answer ready-made when the table reports
-        what it expects (see :class:`FactChange`).
+        Why: the executor applies two effects per action, and this is what the ones
+        not in the usual case do (see :class:`FactChange`). The tables and state are
+        those the same change makes inside :meth:`_change`, but what moved is what
+        the table's writes report instead of a scan of three logs afterwards. The
+        notice's sets are built from dicts in the order the scan finds them, as the
+        scan does (a frozenset built from a dict is sized for it at once, so its
+        iteration order differs from one built from a list).
         """
         state = self._state.with_facts(deletes, adds)  # touches nothing
-        swapped = self._facts.swap(deletes, adds, None)  # all or nothing
+        removed, added = net_change(*self._facts.swap(deletes, adds, None))  # all or nothing
         self._state = self._published = state
-        if known is not None and swapped == known.swapped:
-            applied = known.applied
-            added_facts = known.added_facts
-            removed_facts = known.removed_facts
-        else:
-            removed, added = _net(*swapped)
-            applied = tuple.__new__(AppliedEffect, (tuple(added), tuple(removed), ()))
-            added_facts = frozenset(added) if added else _NONE
-            removed_facts = frozenset(removed) if removed else _NONE
-        if not (added_facts or removed_facts):
-            return applied
-        self.version += 1
-        # KnowledgeChange._made, inlined (two of these per executed action)
-        change = object.__new__(KnowledgeChange)
-        change.__dict__.update(
-            version=self.version,
-            reason=reason,
-            added_instances={},
-            removed_instances={},
-            added_facts=added_facts,
-            removed_facts=removed_facts,
-            changed_fluents={},
-            removed_fluents=_NONE,
-            goal_changed=False,
-            goal=self._goal,
-            state=state,
+        return (
+            state,
+            tuple.__new__(AppliedEffect, (tuple(added), tuple(removed), ())),
+            frozenset(added) if added else EMPTY_SET,
+            frozenset(removed) if removed else EMPTY_SET,
         )
-        # _notify, inlined
-        for callback in list(self._subscribers):
-            try:
-                callback(change)
-            except Exception:  # a broken subscriber must not break the knowledge
-                log.exception("knowledge subscriber %r failed", callback)
-        return applied
 
     def _notify(self, change: KnowledgeChange) -> None:
         for callback in list(self._subscribers):

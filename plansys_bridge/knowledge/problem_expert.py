@@ -10,6 +10,7 @@ Why it is built this way:
   change touches (:mod:`.changes`): a failed change is undone from that log, and a
   subscriber gets exactly one :class:`KnowledgeChange` per change (or transaction).
 * What may be stored is checked in :mod:`.admission` before a change starts.
+* Effects are applied in :mod:`.applying` (the executor's two calls per action).
 * Facts live in a :class:`State` updated copy-on-write, so ``state()`` is free and
   the executor can keep old snapshots; insertion order is kept for listings.
 * One re-entrant lock: adapters and the executor call in from other threads.
@@ -18,18 +19,13 @@ Why it is built this way:
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 
 from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.hub.messages import Knowledge
 from plansys_bridge.knowledge.admission import Admission
-from plansys_bridge.knowledge.changes import (
-    AppliedEffect,
-    ChangeTracker,
-    FactChange,
-    KnowledgeChange,
-    applied_effect,
-)
+from plansys_bridge.knowledge.applying import EffectApplier
+from plansys_bridge.knowledge.changes import AppliedEffect, KnowledgeChange
 from plansys_bridge.knowledge.domain_expert import DomainExpert
 from plansys_bridge.knowledge.evaluation import Evaluator
 from plansys_bridge.knowledge.inputs import (
@@ -44,7 +40,6 @@ from plansys_bridge.pddl.model import (
     Atom,
     Condition,
     Domain,
-    Effect,
     FluentRef,
     FluentValue,
     Problem,
@@ -57,12 +52,8 @@ __all__ = ["AppliedEffect", "KnowledgeChange", "ProblemExpert"]
 
 _NAME = re.compile(r"^[a-z][a-z0-9_\-]*$")
 
-_APPLIED_LIMIT = 100_000
-"""Effects whose admitted facts :meth:`ProblemExpert.apply` remembers; past it, new
-ones are checked every time (until the objects change)."""
 
-
-class ProblemExpert(ChangeTracker):
+class ProblemExpert(EffectApplier):
     """The knowledge base of one domain (see module docs)."""
 
     def __init__(self, domain: Domain | DomainExpert) -> None:
@@ -73,11 +64,6 @@ class ProblemExpert(ChangeTracker):
         self._constants = self.domain_expert.constants
         super().__init__(self._constants)
         self._admit = Admission(self.domain_expert, self._object_type)
-        self._applied: dict[int, FactChange] = {}
-        """Effects of facts only applied before, their facts admitted, by the
-        effect's id, for as long as the objects do not change (the instance table's
-        write count is ``_applied_at``)."""
-        self._applied_at = -1
 
     # ================================================================ validation
 
@@ -410,70 +396,6 @@ class ProblemExpert(ChangeTracker):
     def evaluate(self, cond: Condition | str, bindings: Mapping[str, str] | None = None) -> bool:
         with self._lock:
             return self.evaluator.holds(self._condition(cond), self._state, bindings)
-
-    def apply(
-        self,
-        effect: Effect,
-        bindings: Mapping[str, str] | None = None,
-        duration: float | None = None,
-    ) -> AppliedEffect:
-        """Apply an effect (PDDL semantics) as one validated, atomic change, and
-        say what it changed: the executor keeps that to undo an at-start effect
-        when the action is halted (worked out here, where it is known anyway,
-        instead of from a snapshot read before).
-
-        What the effect does is worked out by the evaluator. Everything is
-        checked before anything changes; an effect of facts only, outside a
-        transaction, then takes the short way (:meth:`_replace_facts`).
-
-        Such an effect (ground facts, no bindings) changes the same facts in every
-        state, so its admitted facts are remembered per effect object until the
-        objects change: a ground action's effects are applied once per step, and
-        plans repeat ground actions (a robot going round). Applying it again is then
-        one look-up before the short way."""
-        with self._lock:
-            version = self._instances.writes
-            plain = None
-            if not bindings:
-                if version != self._applied_at:
-                    self._applied.clear()
-                    self._applied_at = version
-                try:
-                    known = self._applied[id(effect)]
-                except KeyError:
-                    pass
-                else:
-                    if known.effect is effect and not self._depth:
-                        return self._replace_facts(known.deletes, known.adds, "apply", known)
-                plain = self.evaluator.plain_changes(effect)
-            adds: Sequence[Atom]
-            deletes: Sequence[Atom]
-            if plain is None:
-                adds, deletes, updates = self.evaluator.changes(
-                    effect, self._state, bindings, duration
-                )
-            else:
-                (adds, deletes), updates = plain, {}
-            checked_adds = self._admit.facts(adds, version) if adds else []
-            checked_deletes = self._admit.facts(deletes, version) if deletes else []
-            for key in updates:
-                self._admit.fluent(*key)
-            if not updates and not self._depth:
-                if plain is not None and len(self._applied) < _APPLIED_LIMIT:
-                    known = FactChange(effect, checked_deletes, checked_adds)
-                    self._applied[id(effect)] = known
-                    return self._replace_facts(checked_deletes, checked_adds, "apply", known)
-                return self._replace_facts(checked_deletes, checked_adds, "apply")
-            applied = applied_effect(self._state, checked_adds, checked_deletes, updates)
-            with self._change("apply"):
-                self._facts.discard_many(checked_deletes)
-                self._facts.set_many(checked_adds, None)
-                for key, number in updates.items():
-                    self._fluents.set(key, number)
-                self._state = self._state.with_changes(
-                    adds=checked_adds, deletes=checked_deletes, fluents=updates
-                )
-            return applied
 
     # ================================================================ messages
 

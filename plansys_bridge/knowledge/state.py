@@ -56,7 +56,7 @@ class State:
         self._fluents: dict[str, dict[Args, float]] = buckets
         self._flat: dict[FluentKey, float] | None = None
         self._objects: dict[str, str] = dict(objects or {})
-        self._cache: dict[Any, Any] = {}
+        self._cache: dict[Any, Any] | None = None
         self._object_cache: dict[Any, Any] = {}
 
     # ------------------------------------------------------------ reading
@@ -131,8 +131,14 @@ class State:
         return sum(len(t) for t in self._index.values())
 
     def cache(self) -> dict[Any, Any]:
-        """Per-snapshot scratch space for evaluators (derived predicates)."""
-        return self._cache
+        """Per-snapshot scratch space for evaluators (derived predicates).
+
+        Made on first use: only a domain with derived predicates asks for it, and
+        the executor makes two snapshots per action that nobody asks it of."""
+        cache = self._cache
+        if cache is None:
+            cache = self._cache = {}
+        return cache
 
     def object_cache(self) -> dict[Any, Any]:
         """Scratch space shared by every state with the same objects (type lookups)."""
@@ -247,7 +253,7 @@ class State:
         state._fluents = self._fluents
         state._flat = None
         state._objects = self._objects
-        state._cache = {}
+        state._cache = None
         state._object_cache = self._object_cache
         return state
 
@@ -265,7 +271,7 @@ class State:
         state._fluents = fluents
         state._flat = None
         state._objects = objects
-        state._cache = {}
+        state._cache = None
         state._object_cache = object_cache
         return state
 

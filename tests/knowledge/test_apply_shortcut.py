@@ -1,11 +1,13 @@
-"""Applying an effect of facts outside a transaction takes a short way
-(``ChangeTracker._replace_facts``); it must leave the same knowledge, notices,
-versions and errors as the general way (the same effect applied in a transaction,
-whose notice comes from scanning the tables' logs)."""
+"""Applying an effect of facts outside a transaction takes a short way (a
+prepared change, ``EffectApplier.apply``, or else ``ChangeTracker._swap_facts``);
+it must leave the same knowledge, notices, versions and errors as the general way
+(the same effect applied in a transaction, whose notice comes from scanning the
+tables' logs)."""
 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterator
 from typing import Any
 
 import pytest
@@ -14,6 +16,7 @@ from hypothesis import strategies as st
 
 from plansys_bridge.errors import KnowledgeError
 from plansys_bridge.knowledge.changes import ChangeTracker, KnowledgeChange
+from plansys_bridge.knowledge.journal import JournaledTable
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.knowledge.state import State
 from plansys_bridge.pddl.model import (
@@ -160,22 +163,57 @@ def test_a_bad_effect_changes_nothing_either_way() -> None:
         assert _observed(k, seen) == before
 
 
-def test_a_failure_half_way_is_undone(monkeypatch: pytest.MonkeyPatch) -> None:
+class _BreaksHalfWay(tuple[Atom, ...]):
+    """Keys whose iteration fails after the first one (the table has checked them
+    and is changing itself)."""
+
+    def __iter__(self) -> Iterator[Atom]:
+        for i, key in enumerate(tuple.__iter__(self)):
+            if i == 1:
+                raise RuntimeError("out of memory")
+            yield key
+
+
+@pytest.mark.parametrize("usual", [True, False])
+def test_a_failure_half_way_is_undone(monkeypatch: pytest.MonkeyPatch, usual: bool) -> None:
+    """The usual case (the prepared change) fails half way through the fact table,
+    the other (the effect adds a fact that is there) in the new snapshot."""
     k, seen = _knowledge([Atom("p", ("a",)), Atom("p", ("b",)), Atom("p", ("c",))])
     before = _observed(k, seen)
     state = k.state()
+    if usual:
+        effect = AndEffect(
+            (
+                DeleteEffect(Atom("p", ("a",))),
+                AddEffect(Atom("q", ("a", "b"))),
+                AddEffect(Atom("q", ("b", "b"))),
+            )
+        )
+        exchange = JournaledTable.exchange
 
-    def broken(self: State, *args: object, **kwargs: object) -> State:
-        raise RuntimeError("out of memory")
+        def broken(self: JournaledTable[Any, Any], gone: Any, came: Any, *rest: Any) -> bool:
+            return exchange(self, gone, _BreaksHalfWay(came), *rest)
 
-    monkeypatch.setattr(State, "with_facts", broken)
+        monkeypatch.setattr(JournaledTable, "exchange", broken)
+    else:
+        effect = AndEffect((DeleteEffect(Atom("p", ("a",))), AddEffect(Atom("p", ("b",)))))
+
+        def broken_state(self: State, *args: object, **kwargs: object) -> State:
+            raise RuntimeError("out of memory")
+
+        monkeypatch.setattr(State, "with_facts", broken_state)
     with pytest.raises(RuntimeError, match="out of memory"):
-        k.apply(AndEffect((DeleteEffect(Atom("p", ("a",))), AddEffect(Atom("q", ("a", "b"))))))
+        k.apply(effect)
     monkeypatch.undo()
     assert _observed(k, seen) == before and k.state() is state
     k.apply(AndEffect((DeleteEffect(Atom("p", ("b",))),)))
     assert k.get_predicates() == [Atom("p", ("a",)), Atom("p", ("c",))]
     assert [c.version for c in seen] == [k.version]
+    k.apply(effect)  # and the same effect, applied again, works
+    assert k.state().facts == {Atom(*f) for f in [("p", ("c",)), *_ADDED[usual]]}
+
+
+_ADDED = {True: [("q", ("a", "b")), ("q", ("b", "b"))], False: [("p", ("b",))]}
 
 
 def test_a_notice_made_at_once_equals_one_made_field_by_field() -> None:

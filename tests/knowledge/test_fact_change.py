@@ -10,7 +10,8 @@ from unittest.mock import patch
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from plansys_bridge.knowledge.changes import AppliedEffect, FactChange, KnowledgeChange
+from plansys_bridge.knowledge.applying import FactChange
+from plansys_bridge.knowledge.changes import AppliedEffect, KnowledgeChange
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.pddl.model import AddEffect, AndEffect, Atom, DeleteEffect
 from plansys_bridge.pddl.parser import parse_domain
@@ -70,7 +71,7 @@ def test_prepared_answers_equal_worked_out_ones(
     for i in order:
         effect = effects[i % len(effects)]
         answer = kept.apply(effect)
-        with patch("plansys_bridge.knowledge.problem_expert._APPLIED_LIMIT", 0):
+        with patch("plansys_bridge.knowledge.applying._APPLIED_LIMIT", 0):
             again = fresh.apply(effect)
         with general.transaction():
             reference = general.apply(effect)
