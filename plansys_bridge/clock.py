@@ -33,6 +33,7 @@ __all__ = [
     "VirtualTimeEventLoop",
     "WallClock",
     "run",
+    "stamp_loop",
 ]
 
 T = TypeVar("T")
@@ -243,6 +244,24 @@ class VirtualClock:
 
     def __repr__(self) -> str:
         return f"VirtualClock(start={self._start})"
+
+
+def stamp_loop(clock: Clock, loop: asyncio.AbstractEventLoop | None) -> VirtualTimeEventLoop | None:
+    """``loop`` when ``clock.now()`` is ``loop._virtual_now`` whenever ``loop`` runs
+    (a :class:`VirtualClock` on its :class:`VirtualTimeEventLoop`, neither with its own
+    ``now``/``time``), else None.
+
+    Who stamps often on one loop (a performer: its statuses on every change of state,
+    two per action it executes) reads the attribute while that loop is the running one
+    instead of calling ``now()``; the stamp is the same."""
+    if (
+        isinstance(clock, VirtualClock)
+        and type(clock).now is VirtualClock.now
+        and isinstance(loop, VirtualTimeEventLoop)
+        and type(loop).time is VirtualTimeEventLoop.time
+    ):
+        return loop
+    return None
 
 
 def run(coro: Coroutine[Any, Any, T], clock: Clock | None = None, *, debug: bool = False) -> T:

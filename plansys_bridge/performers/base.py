@@ -27,8 +27,10 @@ import asyncio
 import logging
 from abc import abstractmethod
 from collections.abc import Mapping, Sequence
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
+from plansys_bridge.clock import VirtualTimeEventLoop, stamp_loop
 from plansys_bridge.errors import HubError
 from plansys_bridge.hub.messages import ExecutionType, PerformerState, Topics, performer_statuses
 from plansys_bridge.hub.transport import Subscription
@@ -57,6 +59,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 _STATUS = Topics.PERFORMERS_STATUS
+_get_running_loop = asyncio._get_running_loop
 
 
 class ActionPerformer(PerformerProtocol):
@@ -102,6 +105,8 @@ class ActionPerformer(PerformerProtocol):
         """Loop time the commitment lapses at (checked when it matters, no timer: a
         timer per RESPONSE was a good part of an auction's cost with many bidders)."""
         self._loop: asyncio.AbstractEventLoop | None = None
+        self._stamp_loop: VirtualTimeEventLoop | None = None
+        """The loop whose time is the clock's while it runs (see :func:`stamp_loop`)."""
         self._task: asyncio.Task[None] | None = None
         self._cancelling = False
         self._subs: list[Subscription] = []
@@ -112,6 +117,14 @@ class ActionPerformer(PerformerProtocol):
         """Only a subclass's own filter is asked (the base one accepts everything)."""
         """A subclass decides what it serves itself: ask it (else the same rule is
         read off the REQUEST before any goal is built)."""
+        self._own_bid = type(self).bid is not ActionPerformer.bid
+        """The base class's bid (None) is not asked for: a call less per RESPONSE."""
+        self._plain_finish = (
+            type(self)._finish is ActionPerformer._finish
+            and type(self)._send is ActionPerformer._send
+        )
+        """FINISH(success) is sent without :meth:`_finish` and :meth:`_send` unless a
+        subclass hooks one of them (fault injection drops FINISHes there)."""
         hooked = type(self)._publish is not ActionPerformer._publish
         self._out = self._publish if hooked else self.hub.publish
         """Where messages go: the hub's publish itself unless a subclass hooks
@@ -177,6 +190,7 @@ class ActionPerformer(PerformerProtocol):
             self._publish_status()
             raise
         self._loop = asyncio.get_running_loop()
+        self._stamp_loop = stamp_loop(self.clock, self._loop)
         # A subclass that hooks _on_action_msg hears every message there first.
         plain = type(self)._on_action_msg is ActionPerformer._on_action_msg
         self._subs = listen(
@@ -185,7 +199,8 @@ class ActionPerformer(PerformerProtocol):
             self.actions,
             by_arguments=not self._own_serves,
             on_message=self._on_action_msg,
-            on_request=self._on_request if plain else None,
+            # The router hands over only REQUESTs this performer serves (by_arguments).
+            on_request=partial(self._on_request, routed=True) if plain else None,
         )
         self._running = True
         self.state = PerformerState.READY
@@ -251,10 +266,16 @@ class ActionPerformer(PerformerProtocol):
 
     def _publish_status(self) -> None:
         # One status per action served, published together (same messages, same
-        # order): a change of state costs one publish, not one per action.
+        # order): a change of state costs one publish, not one per action. The stamp
+        # is read off the virtual loop when that is what now() would return.
+        loop = self._stamp_loop
+        stamp = (
+            loop._virtual_now
+            if loop is not None and _get_running_loop() is loop
+            else self.clock.now()
+        )
         self._out_many(
-            _STATUS,
-            performer_statuses(self.clock.now(), self.state, self.actions.items(), self.node_name),
+            _STATUS, performer_statuses(stamp, self.state, self.actions.items(), self.node_name)
         )
 
     def _heartbeat(self) -> None:

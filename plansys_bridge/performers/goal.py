@@ -88,6 +88,17 @@ def goal_of(msg: ActionExecution) -> ActionGoal:
     last_msg, last_goal = last_request[0]
     if last_msg is msg:
         return last_goal
-    goal = ActionGoal(msg.action, tuple(msg.arguments), msg.request_id)
+    # ActionGoal(...) filled in at once (a frozen dataclass's __init__ sets each field
+    # through object.__setattr__): one goal per REQUEST, the goal is new and unshared.
+    goal = _new(ActionGoal)
+    arguments = msg.arguments
+    goal.__dict__.update(
+        action=msg.action,
+        arguments=arguments if arguments.__class__ is tuple else tuple(arguments),
+        request_id=msg.request_id,
+    )
     last_request[0] = (msg, goal)
     return goal
+
+
+_new = object.__new__

@@ -50,6 +50,7 @@ _RESPONSE = ExecutionType.RESPONSE
 _CONFIRM = ExecutionType.CONFIRM
 _REJECT = ExecutionType.REJECT
 _CANCEL = ExecutionType.CANCEL
+_FINISH = ExecutionType.FINISH
 _RUNNING = PerformerState.RUNNING
 _READY = PerformerState.READY
 _ACTIONS_HUB = Topics.ACTIONS_HUB
@@ -79,6 +80,8 @@ class PerformerProtocol(PerformerKind, ABC):
     _running: bool
     _own_serves: bool
     _own_accepts: bool
+    _own_bid: bool
+    _plain_finish: bool
     _out: Callable[[str, object], None]
 
     if TYPE_CHECKING:
@@ -102,15 +105,19 @@ class PerformerProtocol(PerformerKind, ABC):
         goal = self._committed
         loop = self._loop
         if goal is not None and loop is not None and loop.time() >= self._commit_deadline:
-            log.info(
-                "performer %s: no CONFIRM/REJECT for %s within %g s; bidding again",
-                self.node_name,
-                goal.full_name,
-                self.commit_timeout,
-            )
-            self._committed = None
+            self._lapse(goal)
             return None
         return goal
+
+    def _lapse(self, goal: ActionGoal) -> None:
+        """No CONFIRM/REJECT came for ``goal`` in time: say so and bid again."""
+        log.info(
+            "performer %s: no CONFIRM/REJECT for %s within %g s; bidding again",
+            self.node_name,
+            goal.full_name,
+            self.commit_timeout,
+        )
+        self._committed = None
 
     def _on_action_msg(self, msg: object) -> None:
         # The class compared first: isinstance is a call, and every message comes here.
@@ -140,7 +147,13 @@ class PerformerProtocol(PerformerKind, ABC):
         elif kind is _CANCEL:
             self._on_cancel_msg(msg)
 
-    def _on_request(self, msg: object) -> None:
+    def _on_request(self, msg: object, routed: bool = False) -> None:
+        """A REQUEST: answer it with a RESPONSE when idle, serving it and bidding.
+
+        ``routed``: handed by the hub's router under this performer's REQUEST route
+        keys (see :func:`~plansys_bridge.performers.listening.listen`), which only
+        hands over the REQUESTs of served actions whose specialised arguments match:
+        that check is then not made again."""
         # Also the subscriber of the REQUEST route keys, so it checks what
         # _on_action_msg would: an auction message, a REQUEST, the performer running.
         if (
@@ -166,22 +179,30 @@ class PerformerProtocol(PerformerKind, ABC):
             if not self.serves(goal):
                 return
         else:
-            spec = self.actions.get(msg.action)
-            if spec is None or (spec and not arguments_match(spec, msg.arguments)):
-                return
+            if not routed:
+                spec = self.actions.get(msg.action)
+                if spec is None or (spec and not arguments_match(spec, msg.arguments)):
+                    return
             last_msg, goal = last_request[0]  # goal_of's look-up, inlined
             if last_msg is not msg:
                 goal = goal_of(msg)
-        try:
-            if self._own_accepts and not self.accepts(goal):
+        if self._own_accepts or self._own_bid or self.bid_costs:
+            try:
+                if self._own_accepts and not self.accepts(goal):
+                    return
+                learned = (
+                    self.bid_costs.cost(goal.action, goal.arguments) if self.bid_costs else None
+                )
+                cost = learned if learned is not None else self.bid(goal)
+            except Exception:
+                log.exception(
+                    "performer %s: bid/accepts for %s raised", self.node_name, goal.full_name
+                )
                 return
-            learned = self.bid_costs.cost(goal.action, goal.arguments) if self.bid_costs else None
-            cost = learned if learned is not None else self.bid(goal)
-        except Exception:
-            log.exception("performer %s: bid/accepts for %s raised", self.node_name, goal.full_name)
-            return
-        if cost is not None and (cost != cost or cost == _INF):  # NaN or inf
-            return
+            if cost is not None and (cost != cost or cost == _INF):  # NaN or inf
+                return
+        else:
+            cost = None  # the base class's bid, not asked
         self._committed = goal
         self._committed_bid = cost
         loop = self._loop or asyncio.get_running_loop()
@@ -203,8 +224,21 @@ class PerformerProtocol(PerformerKind, ABC):
         self._committed = None
 
     def _on_confirm(self, msg: ActionExecution) -> None:
-        goal = self.committed
-        if goal is None or not same_goal(goal, msg):
+        # committed, same_goal and full_name, inlined: once per executed action
+        goal = self._committed
+        if goal is None:
+            return
+        loop = self._loop
+        if loop is not None and loop.time() >= self._commit_deadline:
+            self._lapse(goal)
+            return
+        rid = msg.request_id
+        arguments = msg.arguments
+        if (
+            (goal.request_id and rid and goal.request_id != rid)
+            or goal.action != msg.action
+            or goal.arguments != (arguments if arguments.__class__ is tuple else tuple(arguments))
+        ):
             return  # not (or no longer) committed to this request
         self._committed = None  # _release_commitment, inlined
         self.goal = goal
@@ -213,7 +247,8 @@ class PerformerProtocol(PerformerKind, ABC):
         self.state = _RUNNING
         self._cancelling = False
         self._task = asyncio.get_running_loop().create_task(
-            self._run_goal(goal), name=f"{self.node_name}:{goal.full_name}"
+            self._run_goal(goal),
+            name=f"{self.node_name}:({' '.join((goal.action, *goal.arguments))})",
         )
         self._publish_status()
 
@@ -242,7 +277,23 @@ class PerformerProtocol(PerformerKind, ABC):
                 log.exception("performer %s: %s raised", self.node_name, goal.full_name)
                 self._finish(goal, False, f"{type(exc).__name__}: {exc}")
             else:
-                self._finish(goal, True, status if status else "succeeded")
+                if self._plain_finish:
+                    # _finish and _send, inlined: once per executed action
+                    self._out(
+                        _ACTIONS_HUB,
+                        action_execution(
+                            _FINISH,
+                            self.node_name,
+                            goal.action,
+                            goal.arguments,
+                            success=True,
+                            completion=1.0,
+                            status=status if status else "succeeded",
+                            request_id=goal.request_id,
+                        ),
+                    )
+                else:
+                    self._finish(goal, True, status if status else "succeeded")
         finally:
             self._task = None
             self.goal = None
