@@ -37,26 +37,40 @@ class Admission:
         self._goal_check = _GoalCheck(self)
         self._admitted: dict[tuple[str, tuple[str, ...]], Atom] = {}
         self._admitted_at = -1
+        self._fitting: dict[tuple[str, tuple[str, ...]], bool] = {}
 
     def check_args(
-        self, what: str, text: str, params: tuple[TypedName, ...], args: tuple[str, ...]
+        self, what: str, text: object, params: tuple[TypedName, ...], args: tuple[str, ...]
     ) -> None:
+        """Known objects of the parameters' types; ``text`` names the thing in an
+        error (an atom is written as PDDL only then)."""
         if len(args) != len(params):
             raise KnowledgeError(f"{what} {text}: expects {len(params)} arguments, got {len(args)}")
         for param, arg in zip(params, args, strict=True):
-            if arg.startswith("?"):
+            if arg[:1] == "?":
                 raise KnowledgeError(f"{what} {text}: {arg} is a variable, an object is needed")
             obj_type = self._object_type(arg)
             if obj_type is None:
                 raise KnowledgeError(f"{what} {text}: unknown object {arg!r}")
-            if not self._types.is_subtype_of_any((obj_type,), param.types):
+            if not self._fits(obj_type, param.types):
                 raise KnowledgeError(
                     f"{what} {text}: {arg} is a {obj_type}, parameter {param.name} "
                     f"wants {' or '.join(param.types)}"
                 )
 
+    def _fits(self, obj_type: str, wanted: tuple[str, ...]) -> bool:
+        """Is an object of ``obj_type`` one of the ``wanted`` types? Remembered:
+        the domain's types are fixed, and each fact the knowledge is given asks it
+        once per argument."""
+        key = (obj_type, wanted)
+        fits = self._fitting.get(key)
+        if fits is None:
+            fits = self._fitting[key] = self._types.is_subtype_of_any((obj_type,), wanted)
+        return fits
+
     def fact(self, atom: Atom) -> Atom:
-        atom = Atom(atom.predicate.lower(), tuple([a.lower() for a in atom.args]))
+        # map, not a comprehension: no call of its own (a fact per new fact applied)
+        atom = Atom(atom.predicate.lower(), tuple(map(str.lower, atom.args)))
         pdef = self.domain_expert.get_predicate(atom.predicate)
         if pdef is None:
             raise KnowledgeError(f"predicate {atom}: unknown predicate {atom.predicate!r}")
@@ -64,7 +78,7 @@ class Admission:
             raise KnowledgeError(
                 f"predicate {atom}: {atom.predicate} is derived; it follows from other facts"
             )
-        self.check_args("predicate", str(atom), pdef.parameters, atom.args)
+        self.check_args("predicate", atom, pdef.parameters, atom.args)
         return atom
 
     def facts(self, atoms: Iterable[Atom], objects_version: int) -> list[Atom]:

@@ -30,6 +30,7 @@ from plansys_bridge.knowledge.changes import (
     net_change,
 )
 from plansys_bridge.knowledge.evaluation import Evaluator
+from plansys_bridge.knowledge.grounding import effect_facts
 from plansys_bridge.knowledge.state import Args, State
 from plansys_bridge.pddl.model import Atom, Effect
 
@@ -78,8 +79,9 @@ class FactChange:
         self.removed_facts: frozenset[Atom] = frozenset(removed) if removed else EMPTY_SET
         self.gone = tuple(went)
         self.came = tuple(come)
-        self.fresh = tuple([a for a in come if a not in went])
-        """The facts added that it does not delete: not there in the usual case."""
+        self.fresh = self.applied.added
+        """The facts it adds and does not delete (those it adds, net): not there in
+        the usual case."""
         self.flips = _flips(self.gone, self.came)
 
 
@@ -94,8 +96,11 @@ def _flips(
     whose arguments do not move is left out."""
     toggled: dict[str, set[Args]] = {}
     for atom in (*came, *gone):
-        toggled.setdefault(atom.predicate, set()).symmetric_difference_update((atom.args,))
-    return tuple((p, frozenset(args)) for p, args in toggled.items() if args)
+        if atom.predicate in toggled:
+            toggled[atom.predicate] ^= {atom.args}
+        else:
+            toggled[atom.predicate] = {atom.args}
+    return tuple([(p, frozenset(args)) for p, args in toggled.items() if args])
 
 
 class EffectApplier(ChangeTracker):
@@ -205,11 +210,13 @@ class EffectApplier(ChangeTracker):
     def _prepare(self, effect: Effect, version: int) -> FactChange | None:
         """The effect's :class:`FactChange`, remembered while there is room; None
         when it does more than add and delete ground facts. Its facts are admitted
-        here (adds first), so a bad one raises before anything changes."""
-        plain = self.evaluator.plain_changes(effect)
-        if plain is None:
+        here (adds first), so a bad one raises before anything changes; the
+        effect's own atoms are read (admission makes the facts stored), not the
+        evaluator's copies of them (:meth:`Evaluator.plain_changes`)."""
+        parts = effect_facts(effect)
+        if parts is None:
             return None
-        adds, deletes = plain
+        adds, deletes = parts
         checked_adds = self._admit.facts(adds, version) if adds else []
         checked_deletes = self._admit.facts(deletes, version) if deletes else []
         known = FactChange(effect, checked_deletes, checked_adds)

@@ -20,7 +20,7 @@ from plansys_bridge.knowledge.formulas import fluent_text
 from plansys_bridge.knowledge.grounding import (
     GroundAction,
     UnboundVariableError,
-    ground_args,
+    effect_facts,
     normalize_bindings,
     substitution,
 )
@@ -32,13 +32,10 @@ from plansys_bridge.pddl.model import (
     NO_EFFECT,
     TRUE,
     Action,
-    AddEffect,
     And,
-    AndEffect,
     AnyAction,
     Atom,
     Condition,
-    DeleteEffect,
     Domain,
     DurativeAction,
     Effect,
@@ -58,22 +55,13 @@ __all__ = [
 def _plain_changes(effect: Effect) -> tuple[list[Atom], list[Atom]] | None:
     """(adds, deletes) of an effect that only adds and deletes atoms, worked out
     without an evaluation context (nothing is read from the state); None for any
-    other effect. Atoms are ground in the order the general walk takes, so an
-    unbound variable is the same error."""
-    parts = effect.effects if type(effect) is AndEffect else (effect,)
-    adds: list[Atom] = []
-    deletes: list[Atom] = []
-    no_bindings: dict[str, str] = {}
-    for part in parts:
-        if type(part) is AddEffect:
-            found = adds
-        elif type(part) is DeleteEffect:
-            found = deletes
-        else:
-            return None
-        atom = part.atom
-        found.append(Atom(atom.predicate, ground_args(atom.args, no_bindings)))
-    return adds, deletes
+    other effect. The atoms are made as the general walk makes them (no source
+    location), and an unbound variable is the same error."""
+    found = effect_facts(effect)
+    if found is None:
+        return None
+    adds, deletes = found
+    return [Atom(a.predicate, a.args) for a in adds], [Atom(d.predicate, d.args) for d in deletes]
 
 
 class Evaluator(Reasoner):

@@ -75,6 +75,34 @@ def ground_args(args: tuple[str, ...], bindings: Mapping[str, str]) -> tuple[str
         raise UnboundVariableError(f"variable {exc.args[0]} is not bound") from None
 
 
+def effect_facts(effect: Effect) -> tuple[list[Atom], list[Atom]] | None:
+    """``(adds, deletes)``, the effect's own atoms, when it only adds and deletes
+    ground atoms; None for any other effect. A variable raises as grounding it
+    without bindings does, the first in the order the general walk takes.
+
+    Why the atoms as written (their source location too): the knowledge base only
+    reads their predicate and arguments, to find the facts it admitted before
+    (:meth:`Admission.facts`), so copying them would be wasted work."""
+    parts = effect.effects if effect.__class__ is AndEffect else (effect,)
+    adds: list[Atom] = []
+    deletes: list[Atom] = []
+    for part in parts:
+        if part.__class__ is AddEffect:
+            found = adds
+        elif part.__class__ is DeleteEffect:
+            found = deletes
+        else:
+            return None
+        atom = part.atom
+        if atom.args.__class__ is not tuple:
+            return None  # grounding makes it a tuple: left to the general walk
+        for arg in atom.args:
+            if arg[:1] == "?":
+                raise UnboundVariableError(f"variable {arg} is not bound")
+        found.append(atom)
+    return adds, deletes
+
+
 def _sub_args(args: tuple[str, ...], b: Mapping[str, str]) -> tuple[str, ...]:
     # a list comprehension: a generator is resumed (a call) once per argument
     return tuple([b.get(a, a) if a[:1] == "?" else a for a in args])
@@ -235,6 +263,7 @@ __all__ = [
     "GroundAction",
     "Number",
     "UnboundVariableError",
+    "effect_facts",
     "ground_args",
     "ground_term",
     "normalize_bindings",

@@ -199,11 +199,13 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
         lost: dict[K, tuple[V, int]] = {}
         new: dict[K, None] = {}
         nxt = self._next
+        writes = 0
         try:
             for key in gone:
                 lost[key] = (data[key], seq[key])
                 del data[key]
                 del seq[key]
+                writes += 1
             for key in came:
                 data[key] = value
                 seq[key] = nxt
@@ -212,7 +214,7 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
         except BaseException:
             self._put_back(new, {}, lost)
             raise
-        self.writes += nxt - self._next + len(lost)
+        self.writes += writes + nxt - self._next
         self._next = nxt
         return True
 
