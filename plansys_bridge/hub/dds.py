@@ -8,7 +8,8 @@ the project's wrapper topics for fields PlanSys2 lacks (see
 :func:`~plansys_bridge.hub.dds_config.loopback_config`: loopback only, no multicast.
 
 Delivery: one reader thread per transport waits on a DDS wait set, takes the samples
-of every topic, and hands what one wake-up took, as one batch, to an
+of the readers that have some (:mod:`~plansys_bridge.hub.dds_intake`), and hands what
+one wake-up took, as one batch, to an
 :class:`~plansys_bridge.hub.transport.InProcessTransport` that fans it out to this
 process's subscribers on the asyncio loop (one ``call_soon_threadsafe`` per batch):
 callbacks run on the loop, in arrival order per topic
@@ -18,6 +19,9 @@ reaches its own subscribers directly, as in the in-process transport, when one o
 them wants it (:mod:`~plansys_bridge.hub.local_interest`), and goes out on DDS to
 everybody else; its readers ignore their own participant's samples, so nothing
 arrives twice and nothing is decoded that was never encoded.
+:meth:`~DdsTransport.publish_many` writes a batch (an auction's REJECTs) one sample
+per message, as publishing each would, and hands the local ones to the fan-out as one
+batch.
 
 Duplicates: on a topic with a project wrapper, a project process writes the wrapper,
 and the plain message as well while a reader of the plain topic outside the project
@@ -45,21 +49,11 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
 from typing import Any
 
-from cyclonedds._clayer import ddspy_take, ddspy_write
-from cyclonedds.core import (
-    DDSException,
-    InstanceState,
-    Listener,
-    Policy,
-    Qos,
-    ReadCondition,
-    SampleState,
-    ViewState,
-)
+from cyclonedds._clayer import ddspy_write
+from cyclonedds.core import DDSException, Listener, Qos, ReadCondition
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
@@ -70,6 +64,7 @@ from plansys_bridge.hub.dds_checks import SampleCheck, check_sample
 from plansys_bridge.hub.dds_codec import ROUTES, Channel, Route, check_accepts
 from plansys_bridge.hub.dds_config import check_domain_id, loopback_config
 from plansys_bridge.hub.dds_discovery import publish_discovery_info
+from plansys_bridge.hub.dds_intake import ANY_SAMPLE, PROJECT_MARKER, Endpoint, Intake
 from plansys_bridge.hub.dds_participant import DdsParticipant, endpoint_qos
 from plansys_bridge.hub.local_interest import LocalInterest, Wants
 from plansys_bridge.hub.messages import Topics
@@ -80,21 +75,11 @@ __all__ = ["PROJECT_MARKER", "DdsTransport"]
 log = logging.getLogger(__name__)
 
 Callback = Callable[[object], None]
-Writer = Callable[[Any], bytes]
-
-PROJECT_MARKER = b"plansys_bridge"
-"""USER_DATA of this project's plain-topic writers (their messages also go wrapped)."""
-
-_TAKE_BATCH = 64
-_ANY_SAMPLE = SampleState.Any | ViewState.Any | InstanceState.Any
+Send = Callable[[object], None]
 
 
 def _checked(ret: int, channel: Channel | None) -> None:
-    """Raise for what ``ddspy_write`` returned when it failed.
-
-    Samples are written as XCDR1 bytes with ``ddspy_write`` (what ``DataWriter.write``
-    does, faster); the transport keeps each writer's reference for it.
-    """
+    """Raise for what ``ddspy_write`` returned when it failed."""
     if ret < 0:
         raise DDSException(ret, f"writing on {channel.dds_topic if channel else '?'}")
 
@@ -106,18 +91,6 @@ def _reader_participants(writer: Any) -> set[Any]:
         endpoint = writer.get_matched_subscription_data(handle)
         keys.add(None if endpoint is None else endpoint.participant_key)
     return keys
-
-
-@dataclass
-class _Endpoint:
-    """The DDS entities of one channel."""
-
-    route: Route
-    channel: Channel
-    topic: Any
-    writer: Any
-    reader: Any
-    condition: Any
 
 
 def _qos(channel: Channel, *, reader: bool = False, marked: bool = False) -> Qos:
@@ -160,31 +133,34 @@ class DdsTransport:
         self.node_name = node_name
         """The ROS 2 node this process shows as on ``ros_discovery_info``."""
         self._discovery: tuple[Any, Any] | None = None
-        self._check: SampleCheck = check if check is not None else check_sample
-        """What a received message must pass (:mod:`~plansys_bridge.hub.dds_checks`)."""
+        self._intake = Intake(check if check is not None else check_sample)
+        """The endpoints, and what is taken from their readers (what a received
+        message must pass: :mod:`~plansys_bridge.hub.dds_checks`)."""
+        self._endpoints = self._intake.endpoints
         self._fanout = InProcessTransport()
         self._interest = LocalInterest()
         """Local fan-out to this process's subscribers, on the loop, in arrival order."""
-        self._endpoints: list[_Endpoint] = []
-        self._writers: dict[str, tuple[_Endpoint, _Endpoint | None]] = {}
-        self._out: dict[str, tuple[Route, Writer, Writer | None, int, int | None]] = {}
-        """Per hub topic with a DDS type: its route, what writes its bytes, and the DDS
-        writers' references; filled while the transport runs (started, not closing),
-        so that one look-up tells publish() that it may write."""
+        self._writers: dict[str, tuple[Endpoint, Endpoint | None]] = {}
+        self._out: dict[str, Send] = {}
+        """Per hub topic with a DDS type: what writes one message on DDS (see
+        :meth:`_sender`); filled while the transport runs (started, not closing), so
+        that one look-up tells publish() that it may write."""
         self._matches_changed = False
         """Set by DDS when a writer's matched readers change: look for foreign readers."""
         self._plain_copy: dict[str, bool] = {}
         """Per wrapped hub topic: must the plain sample be written too (a reader outside
         the project reads the plain topic, or the topic is latched)? Unknown: yes."""
-        self._project_writers: set[int] = set()
         self._loop: asyncio.AbstractEventLoop | None = None
         self._dds = DdsParticipant(self.domain_id, self.config, f"dds-hub-{self.domain_id}")
         self._closed = False
         self._warned_local: set[str] = set()
         self.published = 0
         """Messages published so far (all topics), for statistics."""
-        self.dropped = 0
+
+    @property
+    def dropped(self) -> int:
         """Samples received that could not be turned into hub messages."""
+        return self._intake.dropped
 
     # -- lifecycle ---------------------------------------------------------------------
     async def start(self) -> None:
@@ -205,10 +181,10 @@ class DdsTransport:
         except BaseException:
             self._teardown()
             raise
-        self._dds.start(self._poll)
+        self._dds.start(self._poll, keyed=True)
         self._out = out
 
-    def _open(self) -> dict[str, tuple[Route, Writer, Writer | None, int, int | None]]:
+    def _open(self) -> dict[str, Send]:
         """Join the domain and make every endpoint; return what publish() needs per topic."""
         self._dds.open()
         out = {}
@@ -221,13 +197,8 @@ class DdsTransport:
                     made.append(endpoint)
                 project = made[1] if len(made) > 1 else None
                 self._writers[route.hub_topic] = (made[0], project)
-                plain, wrapped = route.to_bytes
-                out[route.hub_topic] = (
-                    route,
-                    plain,
-                    wrapped,
-                    made[0].writer._ref,
-                    None if project is None else project.writer._ref,
+                out[route.hub_topic] = self._sender(
+                    route, made[0].writer._ref, None if project is None else project.writer._ref
                 )
             self._discovery = publish_discovery_info(
                 self._dds.participant,
@@ -239,16 +210,17 @@ class DdsTransport:
             raise HubError(f"DDS domain {self.domain_id}: cannot create endpoints: {exc}") from exc
         return out
 
-    def _endpoint(self, route: Route, channel: Channel) -> _Endpoint:
+    def _endpoint(self, route: Route, channel: Channel) -> Endpoint:
         p = self._dds.participant
         topic = Topic(p, channel.dds_topic, channel.idl_type)
         marked = not channel.project and route.project is not None
         listener = Listener(on_publication_matched=self._on_matched)
         writer = DataWriter(p, topic, _qos(channel, marked=marked), listener=listener)
         reader = DataReader(p, topic, _qos(channel, reader=True))
-        condition = ReadCondition(reader, _ANY_SAMPLE)
-        self._dds.attach(condition)
-        return _Endpoint(route, channel, topic, writer, reader, condition)
+        condition = ReadCondition(reader, ANY_SAMPLE)
+        # keyed by its place in the list of endpoints (from 1)
+        self._dds.attach(condition, len(self._endpoints) + 1)
+        return Endpoint(route, channel, topic, writer, reader, condition)
 
     def _on_matched(self, *_: object) -> None:
         """On a DDS thread: a writer's matched readers changed (see :meth:`_plain_needed`)."""
@@ -292,30 +264,72 @@ class DdsTransport:
         return self._fanout.subscriber_count(topic)
 
     def publish(self, topic: str, msg: object) -> None:
-        out = self._out.get(topic)
-        if out is None:  # not running, or a topic without a DDS type
+        send = self._out.get(topic)
+        if send is None:  # not running, or a topic without a DDS type
             self._publish_unrouted(topic, msg)
             return
-        route, plain, wrapped, plain_ref, project_ref = out
-        if not isinstance(msg, route.accepts):
-            check_accepts(route, msg)  # raises, naming what the topic carries
+        send(msg)
+        self.published += 1
+        if self._interest.wanted(topic, msg):
+            self._fanout.publish(topic, msg)
+
+    def publish_many(self, topic: str, messages: Sequence[object]) -> None:
+        """Publish ``messages`` on ``topic`` in order, as :meth:`publish` one by one
+        would: the same samples in the same order on DDS, and the ones this process's
+        subscribers want delivered to them in that order; in one call, and the local
+        ones as one batch (the REJECTs that end an auction among N bidders, the
+        statuses of a performer's change of state). A message that cannot be
+        published raises as :meth:`publish` would, after those before it went out."""
+        send = self._out.get(topic)
+        if send is None:
+            for msg in messages:
+                self.publish(topic, msg)
+            return
+        wanted = self._interest.wanted
+        local = []
+        sent = 0
         try:
-            if project_ref is not None and wrapped is not None:
-                _checked(ddspy_write(project_ref, wrapped(msg)), route.project)
+            for msg in messages:
+                send(msg)
+                sent += 1
+                if wanted(topic, msg):
+                    local.append(msg)
+        finally:
+            self.published += sent
+            if local:
+                self._fanout.publish_many(topic, local)
+
+    def _sender(self, route: Route, plain_ref: int, project_ref: int | None) -> Send:
+        """What writes one message of ``route`` on DDS, raising HubError if it cannot:
+        the wrapper sample and, while :meth:`_plain_needed` says so, the plain one, as
+        XCDR1 bytes through ``ddspy_write`` (what ``DataWriter.write`` does, faster)."""
+        topic = route.hub_topic
+        accepts = route.accepts
+        plain, wrapped = route.to_bytes
+        if project_ref is None or wrapped is None:
+            wrapped = None
+
+        def send(msg: object) -> None:
+            if not isinstance(msg, accepts):
+                check_accepts(route, msg)  # raises, naming what the topic carries
+            try:
+                if wrapped is None:
+                    _checked(ddspy_write(plain_ref, plain(msg)), route.plain)
+                    return
+                ret = ddspy_write(project_ref, wrapped(msg))
+                if ret < 0:
+                    _checked(ret, route.project)
                 # the plain copy is skipped with one look-up while nothing changed
                 if (self._matches_changed or self._plain_copy.get(topic, True)) and (
                     self._plain_needed(route)
                 ):
                     _checked(ddspy_write(plain_ref, plain(msg)), route.plain)
-            else:
-                _checked(ddspy_write(plain_ref, plain(msg)), route.plain)
-        except (DDSException, ValueError, TypeError, OverflowError) as exc:
-            raise HubError(
-                f"cannot publish {type(msg).__name__} on {route.plain.dds_topic}: {exc}"
-            ) from exc
-        self.published += 1
-        if self._interest.wanted(topic, msg):
-            self._fanout.publish(topic, msg)
+            except (DDSException, ValueError, TypeError, OverflowError) as exc:
+                raise HubError(
+                    f"cannot publish {type(msg).__name__} on {route.plain.dds_topic}: {exc}"
+                ) from exc
+
+        return send
 
     def _plain_needed(self, route: Route) -> bool:
         """Must the plain copy of a wrapped message be written too?
@@ -390,91 +404,17 @@ class DdsTransport:
             await asyncio.sleep(0.02)
 
     # -- receiving ---------------------------------------------------------------------
-    def _poll(self) -> None:
-        """On the reader thread: take what arrived, hand it to the loop in one batch."""
+    def _poll(self, fired: list[int]) -> None:
+        """On the reader thread: take what the readers whose condition fired hold (in
+        the order of the endpoints), hand it to the loop in one batch."""
         batch: list[tuple[str, object]] = []
-        for ep in self._endpoints:
-            self._take(ep, batch)
+        endpoints = self._endpoints
+        take = self._intake.take
+        count = len(endpoints)
+        for key in sorted(k for k in fired if k and k <= count):
+            take(endpoints[key - 1], batch)
         if batch:
             self._fanout.publish_batch(batch)
-
-    def _take(self, ep: _Endpoint, batch: list[tuple[str, object]]) -> None:
-        """Append ``(hub topic, message)`` for each sample ``ep`` has, in order."""
-        skip_marked = not ep.channel.project and ep.route.project is not None
-        topic = ep.route.hub_topic
-        read = ep.channel.read
-        check = self._check
-        append = batch.append
-        while True:
-            samples = ddspy_take(ep.reader._ref, _ANY_SAMPLE, _TAKE_BATCH)
-            if isinstance(samples, int):  # pragma: no cover - a reader deleted under us
-                raise HubError(f"{ep.channel.dds_topic}: take failed ({samples})")
-            if not samples:
-                return
-            for data, info in samples:
-                if not info.valid_data:
-                    continue
-                if skip_marked and self._from_project(ep, info.publication_handle):
-                    continue
-                try:
-                    msg = read(data)
-                    reason = check(topic, msg)
-                except Exception as exc:  # a foreign writer's malformed sample
-                    reason = str(exc)
-                if reason is None:
-                    append((topic, msg))
-                    continue
-                self.dropped += 1
-                log.warning(
-                    "%s: dropped a sample from %s: %s",
-                    ep.channel.dds_topic,
-                    self._writer_name(ep, info.publication_handle),
-                    reason,
-                )
-
-    def _writer_name(self, ep: _Endpoint, handle: int) -> str:
-        """The writer as DDS knows it: its GUID and its participant's."""
-        try:
-            endpoint = ep.reader.get_matched_publication_data(handle)
-        except DDSException:
-            endpoint = None
-        if endpoint is None:
-            return f"writer {handle:#x} (already gone)"
-        return f"writer {endpoint.key} of participant {endpoint.participant_key}"
-
-    def _from_project(self, ep: _Endpoint, handle: int) -> bool:
-        """Whether the writer ``handle`` is a project writer (its message comes wrapped).
-
-        A project writer carries the USER_DATA marker, and its participant also writes
-        the wrapper topic. Either sign suffices: right after discovery the matched
-        writer's QoS may still lack its USER_DATA. Only "yes" is remembered.
-        """
-        if handle in self._project_writers:
-            return True
-        endpoint = ep.reader.get_matched_publication_data(handle)
-        if endpoint is None:
-            # The writer left before we looked: only project writers publish both
-            # copies and leave together with their wrapper, so assume it was one.
-            return True
-        try:
-            marked = endpoint.qos[Policy.Userdata].data == PROJECT_MARKER
-        except (KeyError, AttributeError):
-            marked = False
-        if not marked:
-            marked = endpoint.participant_key in self._wrapper_participants(ep.route)
-        if marked:
-            self._project_writers.add(handle)
-        return marked
-
-    def _wrapper_participants(self, route: Route) -> set[Any]:
-        """Participants with a writer on ``route``'s wrapper topic: project processes."""
-        wrapper = next(e for e in self._endpoints if e.route is route and e.channel.project)
-        keys = set()
-        for handle in wrapper.reader.get_matched_publications():
-            endpoint = wrapper.reader.get_matched_publication_data(handle)
-            if endpoint is not None:
-                keys.add(endpoint.participant_key)
-        return keys
 
     def __repr__(self) -> str:
         state = "closed" if self._closed else "started" if self._dds.running else "new"

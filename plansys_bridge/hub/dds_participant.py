@@ -12,6 +12,7 @@ transient-local, XCDR1.
 
 from __future__ import annotations
 
+import ctypes
 import logging
 import threading
 from collections.abc import Callable, Iterable
@@ -114,8 +115,11 @@ class DdsParticipant:
 
     ``open()`` joins the domain (``HubError`` if it cannot); ``start(poll)`` runs
     ``poll()`` on a thread after every wake-up of the wait set (conditions the owner
-    ``attach``-es); ``close(entities)`` stops the thread and deletes the owner's
-    entities, then its own, then leaves the domain.
+    ``attach``-es); ``start(poll, keyed=True)`` runs ``poll(keys)`` with the keys the
+    owner attached the conditions that fired under, and only when one fired (a
+    hub transport has a reader per topic and most wake-ups concern one of them);
+    ``close(entities)`` stops the thread and deletes the owner's entities, then its
+    own, then leaves the domain.
     """
 
     def __init__(self, domain_id: int, config: str, what: str) -> None:
@@ -129,6 +133,8 @@ class DdsParticipant:
         self._thread: threading.Thread | None = None
         self._stopping = False
         self._domain_held = False
+        self._keyed = 0
+        """Conditions attached with a key (see :meth:`attach`)."""
 
     @property
     def running(self) -> bool:
@@ -146,18 +152,33 @@ class DdsParticipant:
             self.close(())
             raise HubError(f"{self.what}: cannot join DDS domain {self.domain_id}: {exc}") from exc
 
-    def attach(self, condition: Any) -> None:
-        self._waitset.attach(condition)
+    def attach(self, condition: Any, key: int | None = None) -> None:
+        """Wake the thread when ``condition`` fires; with ``key`` (> 0) a keyed poll is
+        told so by that key (the wait set's attach argument, Cyclone's own way)."""
+        if key is None:
+            self._waitset.attach(condition)
+            return
+        if key <= 0:
+            raise ValueError(f"attach key {key} is not > 0")
+        ret = self._waitset._waitset_attach(self._waitset._ref, condition._ref, key)
+        if ret < 0:
+            raise DDSException(ret, f"{self.what}: attaching a condition to the wait set")
+        self._keyed += 1
 
     def detach(self, condition: Any) -> None:
         self._waitset.detach(condition)
 
-    def start(self, poll: Callable[[], None]) -> None:
-        self._thread = threading.Thread(target=self._run, args=(poll,), name=self.what, daemon=True)
+    def start(self, poll: Callable[..., None], *, keyed: bool = False) -> None:
+        self._thread = threading.Thread(
+            target=self._run, args=(poll, keyed), name=self.what, daemon=True
+        )
         self._thread.start()
 
-    def _run(self, poll: Callable[[], None]) -> None:
+    def _run(self, poll: Callable[..., None], keyed: bool) -> None:
         try:
+            if keyed:
+                self._wait_keyed(poll)
+                return
             while not self._stopping:
                 self._waitset.wait(_WAIT_NS)
                 if self._stopping:
@@ -167,6 +188,21 @@ class DdsParticipant:
             return
         except Exception:  # pragma: no cover - a DDS failure must not die silently
             log.exception("%s: DDS reader thread failed", self.what)
+
+    def _wait_keyed(self, poll: Callable[[list[int]], None]) -> None:
+        """The thread's loop for ``poll(keys)``: the keys of the conditions that fired."""
+        waitset = self._waitset
+        wait, ref = waitset._waitset_wait, waitset._ref
+        fired = (ctypes.c_void_p * (self._keyed + 1))()  # the guard condition too
+        size = len(fired)
+        while not self._stopping:
+            n = wait(ref, fired, size, _WAIT_NS)
+            if n < 0:
+                raise DDSException(n, f"{self.what}: waiting on the wait set")
+            if self._stopping:
+                break
+            if n:
+                poll([fired[i] or 0 for i in range(min(n, size))])
 
     def close(self, entities: Iterable[Any]) -> None:
         self._stopping = True
