@@ -82,25 +82,18 @@ class FactChange:
         self.fresh = self.applied.added
         """The facts it adds and does not delete (those it adds, net): not there in
         the usual case."""
-        self.flips = _flips(self.gone, self.came)
-
-
-def _flips(
-    gone: tuple[Atom, ...], came: tuple[Atom, ...]
-) -> tuple[tuple[str, frozenset[Args]], ...]:
-    """``(predicate, arguments)`` pairs: in the usual case the predicate's arguments
-    after the change are those before with these toggled (the deleted ones go, the
-    added ones come, one both deleted and added stays). Predicates in the order
-    :meth:`State.with_facts` first adds them (a new one goes to the end of the
-    index, whose order is the order ``predicates()`` lists them in); a predicate
-    whose arguments do not move is left out."""
-    toggled: dict[str, set[Args]] = {}
-    for atom in (*came, *gone):
-        if atom.predicate in toggled:
-            toggled[atom.predicate] ^= {atom.args}
-        else:
-            toggled[atom.predicate] = {atom.args}
-    return tuple([(p, frozenset(args)) for p, args in toggled.items() if args])
+        # Per predicate, the arguments the usual case toggles (the deleted ones
+        # go, the added ones come, one both deleted and added stays), in the order
+        # State.with_facts first adds the predicates (a new one goes to the end of
+        # the index, whose order is the order predicates() lists them in); a
+        # predicate whose arguments do not move is left out.
+        toggled: dict[str, set[Args]] = {}
+        for atom in (*come, *went):
+            if atom.predicate in toggled:
+                toggled[atom.predicate] ^= {atom.args}
+            else:
+                toggled[atom.predicate] = {atom.args}
+        self.flips = tuple([(p, frozenset(args)) for p, args in toggled.items() if args])
 
 
 class EffectApplier(ChangeTracker):

@@ -123,23 +123,27 @@ class Evaluator(Reasoner):
         variable (it can then neither raise nor need an evaluation context), else
         ``(cond, None)``; remembered per condition object."""
         parts = cond.operands if type(cond) is And else (cond,)
-        facts: list[tuple[str, Args]] = []
+        # Gathered in a tuple (no call per conjunct): each condition of a plan's
+        # ground actions comes here once.
+        facts: tuple[tuple[str, Args], ...] = ()
+        plain = True
         for part in parts:
             if (
                 type(part) is not Atom
                 or part.predicate in self._derived_rules
                 or type(part.args) is not tuple
             ):
+                plain = False
                 break
             # a loop, not all() of a generator (a call per argument)
             for a in part.args:
                 if type(a) is not str or a[:1] == "?":
+                    plain = False
                     break
-            else:
-                facts.append((part.predicate, part.args))
-                continue
-            break
-        entry = (cond, tuple(facts) if len(facts) == len(parts) else None)
+            if not plain:
+                break
+            facts += ((part.predicate, part.args),)
+        entry = (cond, facts if plain else None)
         if len(self._plain_facts) > CACHE_LIMIT:
             self._plain_facts.clear()
         self._plain_facts[id(cond)] = entry

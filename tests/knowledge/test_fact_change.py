@@ -80,6 +80,8 @@ def test_prepared_answers_equal_worked_out_ones(
         assert [list(x) for x in answer] == [list(x) for x in again]
     assert kept.get_predicates() == fresh.get_predicates() == general.get_predicates()
     assert kept.state() == fresh.state() == general.state()
+    # the index's order too (predicates() lists it): a new predicate goes last
+    assert list(kept.state().predicates()) == list(general.state().predicates())
     assert _notices(kept_seen) == _notices(fresh_seen)
     assert all(c.reason == "apply" for c in kept_seen)
     assert all(c.reason == "transaction" for c in general_seen)
