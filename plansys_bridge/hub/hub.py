@@ -57,6 +57,13 @@ class Hub:
         """
         router = self._routers.get(topic)
         if router is None:
+            router = self._router(topic)
+        return router.add(callback, keys)
+
+    def _router(self, topic: str) -> TopicRouter:
+        """The router of ``topic``, subscribed to the transport on first use."""
+        router = self._routers.get(topic)
+        if router is None:
             router = TopicRouter(topic)
             # A transport that can skip delivering its own messages nobody here wants
             # (DDS) is told what the router wants.
@@ -67,14 +74,15 @@ class Hub:
                 else self.transport.subscribe(topic, router.dispatch)
             )
             self._routers[topic] = router
-        return router.add(callback, keys)
+        return router
 
     @property
     def liveness(self) -> LivenessTable:
         """The heartbeat table of this hub (subscribed on first use)."""
         if self._liveness is None:
-            self._liveness = LivenessTable()
-            self.subscribe(Topics.PERFORMERS_STATUS, self._liveness.on_status)
+            table = self._liveness = LivenessTable()
+            # A change of state's statuses (one per action served) in one call
+            self._router(Topics.PERFORMERS_STATUS).add(table.on_status, None, table.on_statuses)
         return self._liveness
 
     async def start(self) -> None:

@@ -16,7 +16,7 @@ clients ask for:
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 from plansys_bridge.hub.messages import ActionPerformerStatus, PerformerState
 
@@ -40,23 +40,34 @@ class LivenessTable:
 
     def on_status(self, msg: object) -> None:
         """The ``performers_status`` subscriber."""
-        # The class compared first (isinstance is a call) and the states read from
-        # module constants: every performer sends one per action on every change.
-        if msg.__class__ is not ActionPerformerStatus and not isinstance(
-            msg, ActionPerformerStatus
-        ):
-            return
-        self.heartbeats += 1
-        state = msg.state
+        self.on_statuses((msg,))
+
+    def on_statuses(self, messages: Sequence[object]) -> None:
+        """:meth:`on_status` for each of ``messages`` in order: a performer publishes a
+        status per action it serves on every change of state, together, and the
+        in-process transport hands them over in one call. They were sent at one moment,
+        so the loop's time is read once for them."""
         states = self._states
-        key = (msg.node_name, msg.action)
-        previous = states.get(key)
-        states[key] = state
-        if state is _RUNNING:
-            self._last_running[msg.node_name] = asyncio.get_running_loop().time()
-        elif state is _READY and previous is _RUNNING and msg.action in self._watchers:
-            for callback in list(self._watchers[msg.action]):
-                callback(msg)
+        now: float | None = None
+        for msg in messages:
+            # The class compared first (isinstance is a call) and the states read from
+            # module constants.
+            if msg.__class__ is not ActionPerformerStatus and not isinstance(
+                msg, ActionPerformerStatus
+            ):
+                continue
+            self.heartbeats += 1
+            state = msg.state
+            key = (msg.node_name, msg.action)
+            previous = states.get(key)
+            states[key] = state
+            if state is _RUNNING:
+                if now is None:
+                    now = asyncio.get_running_loop().time()
+                self._last_running[msg.node_name] = now
+            elif state is _READY and previous is _RUNNING and msg.action in self._watchers:
+                for callback in list(self._watchers[msg.action]):
+                    callback(msg)
 
     def last_running(self, node_name: str) -> float | None:
         """Loop time of the last RUNNING heartbeat of ``node_name`` (None: never heard)."""

@@ -118,13 +118,16 @@ def client_keys(request_id: str, action: str, arguments: Iterable[str]) -> list[
 
 
 class _RoutedSubscription:
-    __slots__ = ("callback", "closed", "keys", "order", "router", "routes", "specs")
+    __slots__ = ("callback", "closed", "keys", "many", "order", "router", "routes", "specs")
 
     def __init__(
         self, router: TopicRouter, callback: Callback, keys: tuple[Hashable, ...] | None, order: int
     ) -> None:
         self.router = router
         self.callback = callback
+        self.many: Callable[[Sequence[object]], None] | None = None
+        """Takes a ``publish_many`` batch in one call, while it is the topic's only
+        subscriber on a topic without routes (the liveness table)."""
         self.keys = keys
         self.order = order
         self.closed = False
@@ -146,12 +149,16 @@ class _RoutedSubscription:
         return f"<Subscription {self.router.topic!r} keys={self.keys} {state}>"
 
 
+_FOUND_KEPT = 4096
+"""Argument tuples a specialised index keeps the candidates of (then it starts over)."""
+
+
 class _SpecialisedIndex:
     """The performers of one action specialised to some arguments, by the first
     argument each one fixes: a REQUEST finds its candidates with one look-up per
     position in use (usually one: the robot)."""
 
-    __slots__ = ("positions",)
+    __slots__ = ("found", "positions")
 
     def __init__(self, action: str, subs: Iterable[_RoutedSubscription]) -> None:
         tables: dict[int, dict[str, list[tuple[_RoutedSubscription, tuple[str, ...], bool]]]] = {}
@@ -163,9 +170,18 @@ class _SpecialisedIndex:
             entry = (sub, spec, len(fixed) == 1)
             tables.setdefault(position, {}).setdefault(spec[position], []).append(entry)
         self.positions = tuple(sorted(tables.items()))
+        self.found: dict[Any, list[_RoutedSubscription]] = {}
+        """:meth:`candidates` by the arguments asked for: a plan runs the same ground
+        actions again and again (the index is rebuilt, empty, when its subscribers
+        change, so a kept answer never goes stale). Never changed once handed out."""
 
     def candidates(self, arguments: Sequence[str]) -> list[_RoutedSubscription]:
         """The subscribers whose specialised arguments match, in subscription order."""
+        kept = arguments.__class__ is tuple
+        if kept:
+            known = self.found.get(arguments)
+            if known is not None:
+                return known
         found: list[_RoutedSubscription] = []
         merged = len(self.positions) > 1
         for position, table in self.positions:
@@ -181,6 +197,10 @@ class _SpecialisedIndex:
                     found.append(sub)
         if merged:
             found.sort()
+        if kept:
+            if len(self.found) >= _FOUND_KEPT:
+                self.found.clear()
+            self.found[arguments] = found
         return found
 
 
@@ -206,9 +226,18 @@ class TopicRouter:
         self._order = count()
         self._transport_subscription: Subscription | None = None
 
-    def add(self, callback: Callback, keys: Iterable[Hashable] | None) -> Subscription:
+    def add(
+        self,
+        callback: Callback,
+        keys: Iterable[Hashable] | None,
+        many: Callable[[Sequence[object]], None] | None = None,
+    ) -> Subscription:
+        """Subscribe ``callback`` (see :meth:`Hub.subscribe`); ``many``, if given, takes
+        the batches of ``publish_many`` in one call while ``callback`` is the only
+        subscriber of a topic without routes."""
         key_tuple = None if keys is None else tuple(dict.fromkeys(keys))
         sub = _RoutedSubscription(self, callback, key_tuple, next(self._order))
+        sub.many = many
         if key_tuple is None or self._router is None:
             self._everyone = [*self._everyone, sub]
             self._rewire()
@@ -269,13 +298,17 @@ class TopicRouter:
     def _rewire(self) -> None:
         """Where the transport delivers on a topic without routes: with one subscriber,
         to that subscriber itself (a call less per message: a performer's statuses
-        reach the liveness table so); else to :meth:`dispatch`. Closing the subscriber
+        reach the liveness table so, a change of state's in one call); else to
+        :meth:`dispatch`. Closing the subscriber
         rewires before anything else is delivered."""
         sub = self._transport_subscription
         if sub is None or self._router is not None:
             return  # a routed topic: always dispatch (keyed subscribers never rewire)
         everyone = self._everyone
-        redirect(sub, everyone[0].callback if len(everyone) == 1 else self.dispatch)
+        if len(everyone) == 1:
+            redirect(sub, everyone[0].callback, everyone[0].many)
+        else:
+            redirect(sub, self.dispatch)
 
     def __len__(self) -> int:
         return len(self._everyone) + len(self._all_keyed)
@@ -325,11 +358,19 @@ class TopicRouter:
             targets = merge(everyone, all_keyed) if all_keyed else everyone
         else:
             specialised = self._specialised
-            keyed = (
-                self._targets(key, msg)
-                if specialised and key in specialised
-                else self._keyed.get(key, ())
-            )
+            index = specialised.get(key) if specialised else None
+            if index is None:
+                keyed = self._keyed.get(key, ())
+            else:
+                # _targets, inlined for a REQUEST whose arguments were seen before and
+                # that no subscriber of every argument shares: the kept candidates
+                arguments = msg.arguments if msg.__class__ is ActionExecution else None
+                found = index.found.get(arguments) if arguments.__class__ is tuple else None
+                keyed = (
+                    found
+                    if found is not None and key not in self._keyed
+                    else self._targets(key, msg)
+                )
             if not keyed:
                 targets = everyone
             elif not everyone:

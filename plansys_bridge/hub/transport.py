@@ -16,7 +16,7 @@ import logging
 import threading
 from collections.abc import Callable, Sequence
 from itertools import repeat
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 from plansys_bridge.errors import HubError
 
@@ -58,7 +58,7 @@ class Transport(Protocol):
 
 
 class _InProcessSubscription:
-    __slots__ = ("batches", "callback", "closed", "many", "topic", "transport")
+    __slots__ = ("batch", "batches", "callback", "closed", "many", "topic", "transport")
 
     def __init__(self, transport: InProcessTransport, topic: str, callback: Callback) -> None:
         self.transport = transport
@@ -67,12 +67,16 @@ class _InProcessSubscription:
         self.closed = False
         self.many: Callable[[Sequence[object]], None] | None = None
         """Takes a batch of ``publish_many`` in one call (see :func:`redirect`)."""
+        self.batch: _Batches | None = None
+        """How the drain hands it a batch (made when ``many`` is first set)."""
         self.batches: list[_Batches] | None = None
-        """``[_Batches(self)]`` while ``many`` is set: the subscribers of a batch."""
+        """``[batch]`` while ``many`` is set: the subscribers of a batch."""
 
     def close(self) -> None:
         if not self.closed:
             self.closed = True
+            if self.batch is not None:
+                self.batch.closed = True
             self.transport._remove(self)
 
     def __repr__(self) -> str:
@@ -82,25 +86,22 @@ class _InProcessSubscription:
 
 class _Batches:
     """A subscription as the drain sees it for a batch: ``callback(messages)`` is its
-    ``many``, and it is closed when the subscription is."""
+    ``many`` (or, once redirected without one, delivers one by one), and it is closed
+    when the subscription is. Plain attributes, kept in step by :func:`redirect` and
+    ``close``: the drain reads them with no call of its own."""
 
-    __slots__ = ("sub",)
+    __slots__ = ("callback", "closed", "sub")
 
     def __init__(self, sub: _InProcessSubscription) -> None:
         self.sub = sub
+        self.closed = sub.closed
+        self.callback: Callable[[Any], None] = self.one_by_one
 
-    @property
-    def closed(self) -> bool:
-        return self.sub.closed
-
-    def callback(self, messages: object) -> None:
+    def one_by_one(self, messages: list[object]) -> None:
+        """A batch queued before the subscription was redirected without ``many``."""
         sub = self.sub
-        assert isinstance(messages, list)
-        if sub.many is not None:
-            sub.many(messages)
-        else:  # redirected meanwhile: one by one
-            for msg in messages:
-                sub.transport._deliver(sub.topic, [sub], msg)
+        for msg in messages:
+            sub.transport._deliver(sub.topic, [sub], msg)
 
 
 class InProcessTransport:
@@ -130,6 +131,8 @@ class InProcessTransport:
         for subs in self._subscribers.values():
             for sub in subs:
                 sub.closed = True
+                if sub.batch is not None:
+                    sub.batch.closed = True
         self._subscribers.clear()
 
     @property
@@ -290,7 +293,16 @@ def redirect(
     if isinstance(subscription, _InProcessSubscription) and not subscription.closed:
         subscription.callback = callback
         subscription.many = many
-        subscription.batches = None if many is None else [_Batches(subscription)]
+        batch = subscription.batch
+        if many is not None:
+            if batch is None:
+                batch = subscription.batch = _Batches(subscription)
+            batch.callback = many
+            subscription.batches = [batch]
+        else:
+            if batch is not None:  # batches already queued go one by one
+                batch.callback = batch.one_by_one
+            subscription.batches = None
         return True
     return False
 

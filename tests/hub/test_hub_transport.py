@@ -10,7 +10,7 @@ import pytest
 from plansys_bridge.clock import VirtualClock, run
 from plansys_bridge.errors import HubError
 from plansys_bridge.hub.hub import Hub
-from plansys_bridge.hub.transport import InProcessTransport, Subscription, Transport
+from plansys_bridge.hub.transport import InProcessTransport, Subscription, Transport, redirect
 
 
 def test_in_process_transport_is_a_transport() -> None:
@@ -137,3 +137,38 @@ def test_publishing_before_any_loop_names_the_topic() -> None:
     transport.subscribe("status", lambda m: None)
     with pytest.raises(HubError, match=r"'status'.*no event loop"):
         transport.publish("status", 1)
+
+
+def test_a_queued_batch_follows_its_subscription_redirected_or_closed() -> None:
+    """A ``publish_many`` batch waits for the drain; if the subscription is redirected
+    meanwhile the batch goes where it now points (one by one without ``many``), and
+    if it is closed (or the transport is) nothing is delivered."""
+
+    async def main() -> list[tuple[str, object]]:
+        transport = InProcessTransport()
+        await transport.start()
+        got: list[tuple[str, object]] = []
+        subs = {t: transport.subscribe(t, lambda m: got.append(("one", m))) for t in "abcd"}
+        for t in "abcd":
+            assert redirect(
+                subs[t], lambda m: got.append(("one", m)), lambda ms: got.append(("first", ms))
+            )
+        for t in "abcd":
+            transport.publish_many(t, [f"{t}1", f"{t}2"])
+        redirect(subs["a"], lambda m: got.append(("new one", m)))
+        redirect(
+            subs["b"], lambda m: got.append(("new one", m)), lambda ms: got.append(("new", ms))
+        )
+        subs["c"].close()
+        await asyncio.sleep(0)
+        transport.publish_many("d", ["d3"])
+        await transport.close()
+        await asyncio.sleep(0)
+        return got
+
+    assert run(main(), VirtualClock()) == [
+        ("new one", "a1"),
+        ("new one", "a2"),
+        ("new", ["b1", "b2"]),
+        ("first", ["d1", "d2"]),
+    ]
