@@ -240,3 +240,39 @@ def test_a_loop_with_its_own_time_is_asked_every_time() -> None:
         assert runner.run(read()) == (0.25, True)
         assert runner.run(read()) == (0.25, True)  # asked again, not remembered
     assert run(read(), clock) == (0.0, False)  # and a plain virtual loop again
+
+
+@settings(max_examples=100, deadline=None)
+@given(steps=st.lists(st.one_of(st.floats(0, 50), st.just("sleep")), max_size=8))
+def test_the_loops_time_reads_its_virtual_time(steps: list[float | str]) -> None:
+    """``time()`` is bound per loop as an attribute read: it must say what the class's
+    method says, after jumps and manual advances alike."""
+
+    async def main() -> None:
+        loop = asyncio.get_running_loop()
+        assert isinstance(loop, VirtualTimeEventLoop)
+        for step in steps:
+            if step == "sleep":
+                await asyncio.sleep(1.5)
+            else:
+                assert isinstance(step, float)
+                loop.advance(step)
+            assert loop.time() == VirtualTimeEventLoop.time(loop) == loop._virtual_now
+
+    run(main(), VirtualClock(start=2.0))
+
+
+def test_a_loop_class_with_its_own_time_keeps_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    class Shifted(VirtualTimeEventLoop):
+        def time(self) -> float:
+            return self._virtual_now + 100.0
+
+    shifted = Shifted(start=1.0)
+    monkeypatch.setattr(VirtualTimeEventLoop, "time", lambda self: -1.0)
+    patched = VirtualTimeEventLoop(start=1.0)
+    try:
+        assert shifted.time() == 101.0
+        assert patched.time() == -1.0
+    finally:
+        shifted.close()
+        patched.close()
