@@ -20,6 +20,12 @@ Why the parts can be kept:
   same remainder modulo 8 (the padding before the bid depends on it), and the sample
   then ends with the bid: a kept entry is used only for such a sample, and only
   samples read to their last byte are kept.
+* reading, the bytes up to the end of the node name's padding (encapsulation header,
+  ``type``, node name) give the same type and node name whenever they are the same
+  bytes: the length they hold is where they end;
+* writing, a wrapped sample's body and request id, and the flag and padding of its
+  bid, depend on the front's length modulo 8 besides their own fields (kept as one
+  part: every message of one auction shares it).
 
 The bytes are exactly those of the generated codec (a property test compares them,
 and the generated codec is compared with Cyclone's own serialiser).
@@ -89,31 +95,49 @@ _BID_FLAG = tuple(b"\x01" + _ZEROS[-(n - 3) & 7] for n in range(8))
 _NO_BID = tuple(b"\x00" + _ZEROS[-(n - 3) & 7] + _F64.pack(0.0) for n in range(8))
 
 
-def _write_plain(msg: hm.ActionExecution) -> bytes:
-    return _front(msg.type, msg.node_id) + _body(
-        msg.action, msg.arguments, msg.success, _F32.pack(msg.completion), msg.status
-    )
-
-
-def _write_wrapped(msg: hm.ActionExecution) -> bytes:
-    front = _front(msg.type, msg.node_id)
-    body = _body(msg.action, msg.arguments, msg.success, _F32.pack(msg.completion), msg.status)
-    request = string_bytes(msg.request_id)
-    at = (len(front) + len(body) + len(request)) & 7
-    bid = msg.bid
-    if bid is None:
-        return b"".join((front, body, request, _NO_BID[at]))
-    return b"".join((front, body, request, _BID_FLAG[at], _F64.pack(bid)))
+@lru_cache(maxsize=_CACHE)
+def _tail(
+    front: int,
+    action: str,
+    arguments: tuple[str, ...],
+    success: bool,
+    completion: bytes,
+    status: str,
+    request_id: str,
+) -> tuple[bytes, bytes]:
+    """What follows a wrapped sample's front of length ``front`` modulo 8 (0 or 4):
+    the body, the request id and, without a bid, the rest of the sample; with one, all
+    but the bid itself. The part all messages of one auction share, kept whole."""
+    head = _body(action, arguments, success, completion, status) + string_bytes(request_id)
+    at = (front + len(head)) & 7
+    return head + _NO_BID[at], head + _BID_FLAG[at]
 
 
 def execution_writer(ros_type: str) -> Callable[[hm.ActionExecution], bytes]:
     """hub ActionExecution -> the bytes of a ``ros_type`` sample (PLAIN or WRAPPED);
     ``ValueError`` for a value the type cannot carry."""
-    write = _write_wrapped if ros_type == WRAPPED else _write_plain
+    wrapped = ros_type == WRAPPED
+    pack_f32 = _F32.pack
+    pack_f64 = _F64.pack
 
     def encode(msg: hm.ActionExecution) -> bytes:
         try:
-            return write(msg)
+            front = _front(msg.type, msg.node_id)
+            if not wrapped:
+                return front + _body(
+                    msg.action, msg.arguments, msg.success, pack_f32(msg.completion), msg.status
+                )
+            no_bid, with_bid = _tail(
+                len(front) & 7,
+                msg.action,
+                msg.arguments,
+                msg.success,
+                pack_f32(msg.completion),
+                msg.status,
+                msg.request_id,
+            )
+            bid = msg.bid
+            return front + no_bid if bid is None else front + with_bid + pack_f64(bid)
         except (struct.error, OverflowError, ValueError, AttributeError, TypeError) as exc:
             raise ValueError(f"{ros_type}: {exc}") from exc
 
@@ -182,6 +206,20 @@ def _read_rest(data: bytes, p: int, size: int, wrapped: bool) -> tuple[dict[str,
     return fields, p
 
 
+def _read_front(data: bytes, size: int) -> tuple[tuple[hm.ExecutionType, str], int]:
+    """The type and node name of an XCDR1 sample, and the 4-aligned offset after them."""
+    value = _I16.unpack_from(data, 4)[0]
+    kind = _KINDS.get(value)
+    if kind is None:
+        raise ValueError(f"{PLAIN}.type is {value!r}, not one of {_KNOWN}")
+    n = _U32.unpack_from(data, 8)[0]
+    p = 12 + n
+    if n == 0 or p > size:
+        raise ValueError(f"string length {n} past the end")
+    node = data[12 : p - 1].decode()
+    return (kind, node), p + (-p & 3)
+
+
 def execution_reader(
     ros_type: str, fallback: Callable[[bytes], hm.ActionExecution]
 ) -> Callable[[bytes], hm.ActionExecution]:
@@ -195,28 +233,33 @@ def execution_reader(
     wrapped = ros_type == WRAPPED
     kept: tuple[dict[bytes, dict[str, Any]], ...] = ({}, {})
     """By the remainder modulo 8 of where the rest starts (0 or 4): its bytes -> fields."""
+    fronts: dict[bytes, tuple[hm.ExecutionType, str]] = {}
+    """A sample's bytes up to the rest (header, type, node name, padding) -> its type
+    and node name: an auction's samples come from the same few nodes, and bytes that
+    are a kept front are that front whatever follows them."""
     new = object.__new__
     cls = hm.ActionExecution
     unpack_u32 = _U32.unpack_from
-    unpack_i16 = _I16.unpack_from
     unpack_f64 = _F64.unpack_from
     isfinite = math.isfinite
 
     def read(data: bytes) -> hm.ActionExecution:
-        if data[:2] != XCDR1_LE:
-            return fallback(data)
         size = len(data)
         try:
-            kind = _KINDS.get(unpack_i16(data, 4)[0])
-            if kind is None:
-                value = unpack_i16(data, 4)[0]
-                raise ValueError(f"{PLAIN}.type is {value!r}, not one of {_KNOWN}")
-            n = unpack_u32(data, 8)[0]
-            p = 12 + n
-            if n == 0 or p > size:
-                raise ValueError(f"string length {n} past the end")
-            node = data[12 : p - 1].decode()
-            p += -p & 3
+            # header, type, node name and padding, as kept: (12 + n) rounded up to 4
+            p = (15 + unpack_u32(data, 8)[0]) & -4
+            front = fronts.get(data[:p])
+        except struct.error:  # too short to say: read as below
+            front = None
+        if front is None and data[:2] != XCDR1_LE:
+            return fallback(data)
+        try:
+            if front is None:
+                front, p = _read_front(data, size)
+                if len(fronts) >= _KEPT:
+                    fronts.clear()
+                fronts[data[:p]] = front
+            kind, node = front
             end = size - 8 if wrapped else size
             table = kept[(p & 4) >> 2]
             fields = table.get(data[p:end])

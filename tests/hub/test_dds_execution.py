@@ -137,3 +137,22 @@ def test_bytes_after_a_samples_end_are_ignored_and_not_kept() -> None:
                 longer = data + extra
                 assert channel.read(longer) == _generic_read(channel.ros_type, longer)
                 assert channel.read(data) == _generic_read(channel.ros_type, data)
+
+
+def test_a_kept_front_is_only_the_front() -> None:
+    """Bytes that start like a sample read before are still read to their end: a
+    truncated sample is refused, and another type or node name is not taken for it."""
+    read = next(c for c in ROUTE.channels if c.ros_type == WRAPPED).read
+    to_wrapped = ROUTE.to_bytes[1]
+    assert to_wrapped is not None
+    msg = hm.ActionExecution(hm.ExecutionType.RESPONSE, "p17", "move", ("r",), bid=2.0)
+    data = to_wrapped(msg)
+    assert read(data) == msg  # its front is kept now
+    for cut in (16, 20, len(data) - 1):
+        with pytest.raises(ValueError, match="malformed sample|past the end"):
+            read(data[:cut])
+    for other in (
+        hm.ActionExecution(hm.ExecutionType.REJECT, "p17", "move", ("r",)),
+        hm.ActionExecution(hm.ExecutionType.RESPONSE, "p18", "move", ("r",), bid=2.0),
+    ):
+        assert read(to_wrapped(other)) == other
