@@ -149,7 +149,7 @@ def test_a_kept_front_is_only_the_front() -> None:
     data = to_wrapped(msg)
     assert read(data) == msg  # its front is kept now
     for cut in (16, 20, len(data) - 1):
-        with pytest.raises(ValueError, match="malformed sample|past the end"):
+        with pytest.raises(ValueError, match=r"malformed sample|past the end"):
             read(data[:cut])
     for other in (
         hm.ActionExecution(hm.ExecutionType.REJECT, "p17", "move", ("r",)),
