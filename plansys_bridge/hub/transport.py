@@ -32,6 +32,9 @@ log = logging.getLogger(__name__)
 
 Callback = Callable[[object], None]
 
+_get_running_loop = asyncio._get_running_loop
+"""The running loop or None, without the exception ``get_running_loop`` raises."""
+
 
 @runtime_checkable
 class Subscription(Protocol):
@@ -179,7 +182,8 @@ class InProcessTransport:
             pending.append((topic, subs, msg))
             return
         loop = self._loop
-        if loop is None or loop.is_closed():
+        # (the loop running this is not closed: is_closed() asked only elsewhere)
+        if loop is None or (loop is not _get_running_loop() and loop.is_closed()):
             try:
                 loop = asyncio.get_running_loop()
             except RuntimeError as exc:
@@ -210,7 +214,7 @@ class InProcessTransport:
             or not subs
             or loop is None
             or threading.get_ident() != self._loop_thread
-            or (not self._pending and loop.is_closed())
+            or (not self._pending and loop is not _get_running_loop() and loop.is_closed())
         ):
             # closed, nobody listening, not started, another thread or a closed loop:
             # publish says what happens

@@ -32,7 +32,13 @@ from typing import TYPE_CHECKING, Any
 
 from plansys_bridge.clock import VirtualTimeEventLoop, stamp_loop
 from plansys_bridge.errors import HubError
-from plansys_bridge.hub.messages import ExecutionType, PerformerState, Topics, performer_statuses
+from plansys_bridge.hub.messages import (
+    ActionPerformerStatus,
+    ExecutionType,
+    PerformerState,
+    Topics,
+    performer_statuses,
+)
 from plansys_bridge.hub.transport import Subscription
 from plansys_bridge.performers.entry import PerformerConfig, construct
 from plansys_bridge.performers.goal import (
@@ -60,6 +66,7 @@ log = logging.getLogger(__name__)
 
 _STATUS = Topics.PERFORMERS_STATUS
 _get_running_loop = asyncio._get_running_loop
+_new = object.__new__
 
 
 class ActionPerformer(PerformerProtocol):
@@ -106,6 +113,9 @@ class ActionPerformer(PerformerProtocol):
         timer per RESPONSE was a good part of an auction's cost with many bidders)."""
         self._loop: asyncio.AbstractEventLoop | None = None
         self._stamp_loop: VirtualTimeEventLoop | None = None
+        self._status_fields: list[dict[str, object]] | None = None
+        """Per action served, the fields of its status that do not change (set at
+        start, in :class:`ActionPerformerStatus`'s order after stamp and state)."""
         """The loop whose time is the clock's while it runs (see :func:`stamp_loop`)."""
         self._task: asyncio.Task[None] | None = None
         self._cancelling = False
@@ -191,6 +201,10 @@ class ActionPerformer(PerformerProtocol):
             raise
         self._loop = asyncio.get_running_loop()
         self._stamp_loop = stamp_loop(self.clock, self._loop)
+        self._status_fields = [
+            {"action": action, "specialized_arguments": spec, "node_name": self.node_name}
+            for action, spec in self.actions.items()
+        ]
         # A subclass that hooks _on_action_msg hears every message there first.
         plain = type(self)._on_action_msg is ActionPerformer._on_action_msg
         self._subs = listen(
@@ -274,9 +288,24 @@ class ActionPerformer(PerformerProtocol):
             if loop is not None and _get_running_loop() is loop
             else self.clock.now()
         )
-        self._out_many(
-            _STATUS, performer_statuses(stamp, self.state, self.actions.items(), self.node_name)
-        )
+        served = self._status_fields
+        if served is None:  # not started
+            self._out_many(
+                _STATUS, performer_statuses(stamp, self.state, self.actions.items(), self.node_name)
+            )
+            return
+        # performer_statuses, inlined from the fields kept at start: two changes of
+        # state per executed action
+        state = self.state
+        made = []
+        for fields in served:
+            msg = _new(ActionPerformerStatus)
+            kept = msg.__dict__
+            kept["status_stamp"] = stamp
+            kept["state"] = state
+            kept.update(fields)
+            made.append(msg)
+        self._out_many(_STATUS, made)
 
     def _heartbeat(self) -> None:
         # A timer callback rather than a task: heartbeats are most of the traffic of

@@ -131,7 +131,34 @@ class PerformerProtocol(PerformerKind, ABC):
         elif msg.node_id != self.node_name:
             return
         elif kind is _CONFIRM:
-            self._on_confirm(msg)
+            # committed, same_goal and full_name, inlined: once per executed action
+            goal = self._committed
+            if goal is None:
+                return
+            loop = self._loop
+            if loop is not None and loop.time() >= self._commit_deadline:
+                self._lapse(goal)
+                return
+            rid = msg.request_id
+            arguments = msg.arguments
+            if (
+                (goal.request_id and rid and goal.request_id != rid)
+                or goal.action != msg.action
+                or goal.arguments
+                != (arguments if arguments.__class__ is tuple else tuple(arguments))
+            ):
+                return  # not (or no longer) committed to this request
+            self._committed = None  # _release_commitment, inlined
+            self.goal = goal
+            self.completion = 0.0
+            self.executed += 1
+            self.state = _RUNNING
+            self._cancelling = False
+            self._task = asyncio.get_running_loop().create_task(
+                self._run_goal(goal),
+                name=f"{self.node_name}:({' '.join((goal.action, *goal.arguments))})",
+            )
+            self._publish_status()
         elif kind is _REJECT:
             # same_goal and the release, inlined: every bidder but one comes here. The
             # commitment is read without its deadline: a lapsed one ends here either way.
@@ -222,35 +249,6 @@ class PerformerProtocol(PerformerKind, ABC):
 
     def _release_commitment(self) -> None:
         self._committed = None
-
-    def _on_confirm(self, msg: ActionExecution) -> None:
-        # committed, same_goal and full_name, inlined: once per executed action
-        goal = self._committed
-        if goal is None:
-            return
-        loop = self._loop
-        if loop is not None and loop.time() >= self._commit_deadline:
-            self._lapse(goal)
-            return
-        rid = msg.request_id
-        arguments = msg.arguments
-        if (
-            (goal.request_id and rid and goal.request_id != rid)
-            or goal.action != msg.action
-            or goal.arguments != (arguments if arguments.__class__ is tuple else tuple(arguments))
-        ):
-            return  # not (or no longer) committed to this request
-        self._committed = None  # _release_commitment, inlined
-        self.goal = goal
-        self.completion = 0.0
-        self.executed += 1
-        self.state = _RUNNING
-        self._cancelling = False
-        self._task = asyncio.get_running_loop().create_task(
-            self._run_goal(goal),
-            name=f"{self.node_name}:({' '.join((goal.action, *goal.arguments))})",
-        )
-        self._publish_status()
 
     def _on_cancel_msg(self, msg: ActionExecution) -> None:
         committed = self.committed

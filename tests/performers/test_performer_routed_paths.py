@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from plansys_bridge.clock import VirtualClock, VirtualTimeEventLoop, run, stamp_loop
 from plansys_bridge.hub.hub import Hub
-from plansys_bridge.hub.messages import ExecutionType, Topics, action_execution
+from plansys_bridge.hub.messages import ExecutionType, Topics, action_execution, performer_statuses
 from plansys_bridge.hub.transport import InProcessTransport
 from plansys_bridge.performers.base import ActionGoal, ActionPerformer, PerformerContext
 
@@ -133,3 +133,37 @@ def test_stamp_loop_is_the_virtual_loop_only_where_now_reads_it() -> None:
     finally:
         loop.close()
         other.close()
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    actions=st.dictionaries(
+        st.sampled_from(["move", "pick", "drop"]), st.lists(NAMES, max_size=2), min_size=1
+    ),
+    start=st.sampled_from([0.0, 7.5]),
+)
+def test_statuses_made_from_the_kept_fields_are_performer_statuses(
+    actions: dict[str, list[str]], start: float
+) -> None:
+    """Started, a performer makes its statuses from fields kept at start; they must be
+    what ``performer_statuses`` makes, field by field and in the same order."""
+
+    async def main() -> None:
+        clock = VirtualClock(start=start)
+        hub = Hub(InProcessTransport(), clock)
+        await hub.start()
+        sent: list[Any] = []
+        hub.subscribe(Topics.PERFORMERS_STATUS, sent.append)
+        p = Plain(PerformerContext(hub, clock), "p", actions)
+        await p.start()
+        await asyncio.sleep(0.25)
+        sent.clear()
+        p._publish_status()
+        await asyncio.sleep(0)
+        expected = performer_statuses(clock.now(), p.state, p.actions.items(), "p")
+        assert sent == expected
+        assert [list(vars(m).items()) for m in sent] == [list(vars(m).items()) for m in expected]
+        await p.stop()
+        await hub.close()
+
+    run(main(), VirtualClock(start=start))
