@@ -143,10 +143,11 @@ def test_truncated_recording_is_one_error_naming_file_and_offset(
 def test_damaged_recording_names_the_offset(
     recordings: list[Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    (mcap,) = _truncate(recordings[0], tmp_path / "bad", 10**9).parent.glob("*.mcap")
-    data = bytearray(mcap.read_bytes())
-    data[0:8] = b"not mcap"
-    mcap.write_bytes(bytes(data))
+    # the whole recording, its magic overwritten in place (the rest left as recorded)
+    shutil.copytree(recordings[0], tmp_path / "bad")
+    (mcap,) = (tmp_path / "bad").glob("*.mcap")
+    with mcap.open("r+b") as f:
+        f.write(b"not mcap")
     assert main(["learn", str(mcap), "--domain", str(DOMAIN)]) == 2
     err = capsys.readouterr().err
     assert f"{mcap}: offset 0: not an MCAP file" in err
