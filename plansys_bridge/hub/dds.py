@@ -275,27 +275,26 @@ class DdsTransport:
 
     def publish_many(self, topic: str, messages: Sequence[object]) -> None:
         """Publish ``messages`` on ``topic`` in order, as :meth:`publish` one by one
-        would: the same samples in the same order on DDS, and the ones this process's
-        subscribers want delivered to them in that order; in one call, and the local
-        ones as one batch (the REJECTs that end an auction among N bidders, the
-        statuses of a performer's change of state). A message that cannot be
-        published raises as :meth:`publish` would, after those before it went out."""
+        would: the same samples in the same order on DDS, and the same deliveries to
+        this process's subscribers in that order; in one call, and at home as one
+        batch (the REJECTs that end an auction among N bidders, the statuses of a
+        performer's change of state). A message that cannot be published raises as
+        :meth:`publish` would, after those before it went out."""
         send = self._out.get(topic)
         if send is None:
             for msg in messages:
                 self.publish(topic, msg)
             return
-        wanted = self._interest.wanted
-        local = []
         sent = 0
         try:
             for msg in messages:
                 send(msg)
                 sent += 1
-                if wanted(topic, msg):
-                    local.append(msg)
         finally:
             self.published += sent
+            done = messages if sent == len(messages) else messages[:sent]
+            wants = self._interest.wants(topic)
+            local = done if wants is None else [msg for msg in done if wants(msg)]
             if local:
                 self._fanout.publish_many(topic, local)
 

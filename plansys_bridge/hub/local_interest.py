@@ -64,6 +64,16 @@ class LocalInterest:
             return filters[0](msg)
         return any(wants(msg) for wants in filters)
 
+    def wants(self, topic: str) -> Wants | None:
+        """What tells whether a message of ``topic`` is wanted (None: every one is):
+        asked once for a batch, then of each message without a call of the table's."""
+        filters = self._filters.get(topic)
+        if filters is None:
+            return None
+        if len(filters) == 1:
+            return filters[0]
+        return lambda msg: any(wants(msg) for wants in filters)
+
     def _remove(self, topic: str, entry: object) -> None:
         entries = [e for e in self._entries.get(topic, ()) if e[0] is not entry]
         self._entries[topic] = entries

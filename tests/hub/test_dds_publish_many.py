@@ -163,3 +163,33 @@ def test_the_reader_accepts_exactly_what_check_sample_accepts() -> None:
     got, dropped = with_pair(body)
     assert got == expected
     assert 0 < dropped == len(sent) - len(expected)
+
+
+def test_the_batch_filter_says_what_wanted_says_of_each_message() -> None:
+    from plansys_bridge.hub.local_interest import LocalInterest
+
+    class Sub:
+        closed = False
+
+        def close(self) -> None:
+            self.closed = True
+
+    msgs = [_message(HUB, 0, i) for i in range(9)]
+    interest = LocalInterest()
+
+    def agree() -> None:
+        wants = interest.wants(HUB)
+        assert [wants is None or wants(m) for m in msgs] == [interest.wanted(HUB, m) for m in msgs]
+
+    agree()  # nobody subscribed
+    first = interest.track(HUB, Sub(), _wants)
+    agree()
+    second = interest.track(HUB, Sub(), lambda m: m.node_id.endswith("3"))  # type: ignore[attr-defined]
+    agree()
+    assert interest.wants(HUB)(msgs[3]) and not interest.wants(HUB)(msgs[5])  # type: ignore[misc]
+    everything = interest.track(HUB, Sub(), None)
+    agree()
+    assert interest.wants(HUB) is None
+    for sub in (everything, first, second):
+        sub.close()
+        agree()
