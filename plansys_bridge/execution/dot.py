@@ -73,7 +73,8 @@ class IncrementalDot:
             ]
         )
         self._labels = [f'a{i} [label="{head}' for i, head in enumerate(heads)]
-        self._nodes = [self._node(i, ActionStatus.NOT_EXECUTED) for i in range(len(graph.steps))]
+        tail = _status_tail(ActionStatus.NOT_EXECUTED)
+        self._nodes = [label + tail for label in self._labels]
         self._statuses = [ActionStatus.NOT_EXECUTED] * len(graph.steps)
         self._tail = "}\n" + self._dependencies() + self._subgoals(goal_atoms) + "}\n"
         self._blocks = [
@@ -90,7 +91,7 @@ class IncrementalDot:
     def set_status(self, i: int, status: ActionStatus) -> None:
         if self._statuses[i] is not status:
             self._statuses[i] = status
-            self._nodes[i] = self._node(i, status)
+            self._nodes[i] = self._labels[i] + _status_tail(status)  # _node(), inlined
             self._dirty.add(i // _BLOCK)
             self._text = None
 
@@ -106,8 +107,10 @@ class IncrementalDot:
         edges = list(self._graph.edge_reasons())
         tips = _quoted_inner([reason for _, _, reason in edges])
         return "".join(
-            f'a{src} -> a{dst} [tooltip="{tip}"];\n'
-            for (src, dst, _), tip in zip(edges, tips, strict=True)
+            [
+                f'a{src} -> a{dst} [tooltip="{tip}"];\n'
+                for (src, dst, _), tip in zip(edges, tips, strict=True)
+            ]
         )
 
     def _subgoals(self, goal_atoms: Iterable[Atom]) -> str:

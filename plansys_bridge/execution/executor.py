@@ -40,7 +40,6 @@ import asyncio
 import dataclasses
 import itertools
 import logging
-import threading
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
@@ -61,7 +60,7 @@ from plansys_bridge.planning.plan import Plan
 from plansys_bridge.planning.plan_graph import PlanGraph, build_plan_graph
 
 if TYPE_CHECKING:
-    from plansys_bridge.knowledge.problem_expert import KnowledgeChange, ProblemExpert
+    from plansys_bridge.knowledge.problem_expert import ProblemExpert
     from plansys_bridge.planning.planner import Planner
 
 __all__ = ["Executor"]
@@ -199,7 +198,7 @@ class Executor:
                 Topics.EXECUTING_PLAN, ExecutingPlan(current.to_msg(), execution.plan_id)
             )
             await self._run(ctx, execution, goal)
-            result.actions.extend(rt.record for rt in ctx.actions)
+            result.actions.extend([rt.record for rt in ctx.actions])
             if ctx.cancelled:
                 result.status, result.message = "cancelled", "cancelled"
                 return
@@ -262,24 +261,11 @@ class Executor:
         loop = asyncio.get_running_loop()
         root = build_tree(ctx)
         event = asyncio.Event()
-        loop_thread = threading.get_ident()
-
-        def changed(change: KnowledgeChange) -> None:
-            ctx.knowledge_changed(change)
-            event.set()
-
-        get_ident, knowledge_changed, wake = threading.get_ident, ctx.knowledge_changed, event.set
-
-        def from_knowledge(change: KnowledgeChange) -> None:
-            # changed(), inlined: the loop's thread applies two effects per action
-            if get_ident() == loop_thread:
-                knowledge_changed(change)
-                wake()
-            else:
-                loop.call_soon_threadsafe(changed, change)
-
-        ctx.bind_wake(event.set)
-        unsubscribe = self.knowledge.subscribe(from_knowledge)
+        # the context wakes the loop itself, and is the knowledge's subscriber itself
+        # (it hands a change made in another thread over to the loop): no function
+        # in between that only forwards, twice per action
+        ctx.bind_wake(event.set, loop)
+        unsubscribe = self.knowledge.subscribe(ctx.knowledge_changed)
         clock = self.hub.clock
         name = f"{ctx.plan_id}/{ctx.plan_index}"
         dot = (
@@ -289,6 +275,7 @@ class Executor:
         )
         timer: asyncio.TimerHandle | None = None
         armed_for: float | None = None
+        dot_due: float | None = None  # the DOT's deadline last scheduled
         try:
             last_dot = clock.now()
             if dot is not None:
@@ -306,8 +293,9 @@ class Executor:
                     if clock.now() >= due:
                         self._publish_dot(ctx, dot)
                         last_dot = clock.now()
-                    else:
+                    elif due != dot_due:  # not once more per wake-up until it comes
                         ctx.schedule(due)
+                        dot_due = due
                 if root.status != Status.RUNNING:
                     break
                 deadline = ctx.next_deadline()
@@ -347,6 +335,11 @@ class Executor:
 
     def _tick(self, root: py_trees.behaviour.Behaviour, ctx: PlanContext) -> None:
         for _ in range(self.options.max_ticks_per_wake):
+            if root.status == Status.RUNNING and ctx.unfinished and not (ctx.active or ctx.touched):
+                # a round would tick no branch and leave the root as it is: the round
+                # after the last move, and the wake-up an effect applied in the last
+                # tick asked for, come to nothing about every other wake-up
+                return
             ctx.progress = False
             root.tick_once()
             if ctx.halt_requested:

@@ -22,35 +22,44 @@ a walk through the decorator and two sequences.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
+import uuid
+from collections.abc import Iterator
+from typing import Any
 
+import py_trees
 from py_trees.behaviour import Behaviour
-from py_trees.common import Status
+from py_trees.common import BlackBoxLevel, Status
 
 from plansys_bridge.errors import PlansysBridgeError
 from plansys_bridge.execution import phases, waits
+from plansys_bridge.execution.effect_delta import EffectDelta
 from plansys_bridge.execution.phases import ExecutePhase
 from plansys_bridge.execution.plan_context import ActionRuntime, PlanContext
-from plansys_bridge.planning.orderings import END, START, Point
+from plansys_bridge.planning.orderings import END, GROUND, START
 
 __all__ = ["StandardAction"]
 
-_BEFORE_RUN = 3
-"""Phases before the run: predecessors (start), at-start requirement, at-start effects."""
+_RUNNING = Status.RUNNING
+_SUCCESS = Status.SUCCESS
+_FAILURE = Status.FAILURE
 
-
+_RUN = 3
+"""The step that runs the action: phases before it are the wait for the
+predecessors of the start (0), the at-start requirement (1) and effects (2)."""
 _END_WAIT = 4
 """The step that waits for the predecessors of the action's end."""
-_PREDECESSORS = phases.PredecessorsPhase.label
-_AT_START_REQ = phases.AtStartReqPhase.label
-_OVER_ALL = phases.OverAllReqPhase.label
-_STATELESS: dict[int, tuple[str, Callable[[PlanContext, ActionRuntime], Status]]] = {
-    2: (phases.AtStartEffectPhase.label, phases.apply_at_start_effect),
-    5: (phases.AtEndReqPhase.label, phases.check_at_end_req),
-    6: (phases.AtEndEffectPhase.label, phases.apply_at_end_effect),
-}
-"""The steps that keep no state, by index: their label (for an error) and step."""
 _LAST = 6
+"""The at-end effects; after them (5: the at-end requirement) the action is over."""
+_LABELS = {
+    0: phases.PredecessorsPhase.label,
+    1: phases.AtStartReqPhase.label,
+    2: phases.AtStartEffectPhase.label,
+    _END_WAIT: phases.PredecessorsPhase.label,
+    5: phases.AtEndReqPhase.label,
+    _LAST: phases.AtEndEffectPhase.label,
+}
+"""The label an error of each step (but the run) is reported with."""
+_OVER_ALL = phases.OverAllReqPhase.label
 
 
 class StandardAction(Behaviour):
@@ -58,16 +67,26 @@ class StandardAction(Behaviour):
     effects (see module docs)."""
 
     def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
-        super().__init__(f"{rt.text}:{rt.index}")
+        # Behaviour.__init__'s attributes, but for its uuid4 (from os.urandom), logger
+        # and tick generator, which are made on first use (__getattr__): a plan of
+        # thousands of actions asks for none of them unless it is stopped early.
+        name = f"{rt.step.text}:{rt.index}"
+        self.name = name
+        self.blackboards = []
+        self.qualified_name = f"{type(self).__qualname__}/{name}"
+        self.status = Status.INVALID
+        self.parent = None
+        self.children = []
+        self.feedback_message = ""
+        self.blackbox_level = BlackBoxLevel.NOT_A_BLACKBOX
         self.ctx = ctx
         self.rt = rt
         self._step = 0
-        """Index of the current phase; ``_BEFORE_RUN`` is the run."""
+        """Index of the current phase; ``_RUN`` is the run."""
         self._entered = False
-        """Whether the current waiting step was entered (its state set up)."""
-        self._waits: Sequence[tuple[int, Point]] = ()
+        """Whether the at-start wait was entered (its deadline set up)."""
         self._next = 0
-        """The predecessor wait's state: its waits and how far it got."""
+        """How far through its predecessors the current wait got."""
         self._deadline: float | None = None
         self._timeout: float | None = None
         """The at-start wait's state."""
@@ -76,114 +95,175 @@ class StandardAction(Behaviour):
         self._overrun: phases.OverrunPhase | None = None
         self._execution: ExecutePhase | None = None
 
+    def __getattr__(self, name: str) -> Any:
+        """py_trees' ``id``, ``logger`` and ``iterator``, made when first asked for
+        (as ``Behaviour.__init__`` makes them; the uuid is a fresh uuid4)."""
+        value: Any
+        if name == "id":
+            value = uuid.uuid4()
+        elif name == "logger":
+            value = py_trees.logging.Logger(self.name)
+        elif name == "iterator":
+            value = self.tick()
+        else:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        self.__dict__[name] = value
+        return value
+
     def tick(self) -> Iterator[Behaviour]:
         """py_trees' ``Behaviour.tick`` (see :meth:`tick_step`), as the generator
         py_trees expects."""
         self.tick_step()
         yield self
 
+    def update(self) -> Status:
+        self.tick_step()
+        return self.status
+
     def tick_step(self) -> None:
         """One tick without a generator, which is how :class:`PlanRoot
         <plansys_bridge.execution.tree_builder.PlanRoot>` ticks its standard branches:
         the calls of py_trees' ``Behaviour.tick`` whose effect is not nil here
         (``initialise`` and, on SUCCESS, ``terminate`` do nothing; py_trees' debug
-        message is skipped), so thousands of ticks do not pay for them."""
-        status = self._advance()
-        if status == Status.RUNNING:
-            self.status = Status.RUNNING
-            return
-        self.ctx.action_finished(self.rt, status == Status.SUCCESS)
-        self.status = Status.SUCCESS
+        message is skipped), so thousands of ticks do not pay for them.
 
-    def update(self) -> Status:
-        status = self._advance()
-        if status == Status.RUNNING:
-            return Status.RUNNING
-        self.ctx.action_finished(self.rt, status == Status.SUCCESS)
-        return Status.SUCCESS
-
-    def _advance(self) -> Status:
-        """Step through the phases until one is RUNNING or fails. The waiting steps
-        keep their state in this object's fields (:mod:`plansys_bridge.execution.waits`),
-        the others keep none: every step is a plain function call, no phase object
-        is made before the run, and ``Phase.run``'s error handling is inline."""
+        It steps through the phases until one is RUNNING or fails. The waiting
+        steps keep their state in this object's fields, the others keep none, and
+        each step's common case is written out here: a requirement that holds is
+        one look-up (the phase's function, which words what is missing, is called
+        when it does not), an effect is applied without a phase function, and no
+        phase object is made before the run."""
         ctx, rt = self.ctx, self.rt
+        step = self._step
         while True:
-            step = self._step
-            if step == _BEFORE_RUN:
-                status = self._run()
-            elif step in _STATELESS:
-                label, function = _STATELESS[step]
+            if step == _RUN:
+                # The reactive part: the guards first (the overrun, then the over-all
+                # requirement), then the execution; a failing guard halts it.
+                execution = self._execution
+                if execution is None and not self._guarded:
+                    self._guarded = True
+                    if ctx.options.overrun_percentage is not None or ctx.options.action_timeouts:
+                        self._guard(ctx, rt)
+                overrun = self._overrun
+                if overrun is not None and overrun.step() is not _SUCCESS:
+                    status = _FAILURE
+                else:
+                    try:
+                        if ctx.evaluator.holds(
+                            rt.ground.over_all, ctx.knowledge.state(), GROUND, rt.step.duration
+                        ):
+                            status = _SUCCESS
+                        else:
+                            status = phases.check_over_all_req(ctx, rt)
+                    except PlansysBridgeError as exc:
+                        rt.reason = f"{_OVER_ALL}: {exc}"
+                        status = _FAILURE
+                if status is not _SUCCESS:
+                    self._halt_execution()
+                    break
+                if execution is None:
+                    execution = self._execution = ExecutePhase(ctx, rt)
+                    execution.initialise()
+                task = execution.task
+                if task is not None and not task.done():
+                    ctx.rest(rt)  # ExecutePhase.step's answer while the performer works
+                    status = _RUNNING
+                    break
                 try:
-                    status = function(ctx, rt)
+                    status = execution.step()
                 except PlansysBridgeError as exc:
-                    rt.reason = f"{label}: {exc}"
-                    status = Status.FAILURE
-            elif step > _LAST:
-                return Status.SUCCESS  # every phase is over
+                    status = execution.fail(f"{execution.label}: {exc}")
+                if status is not _RUNNING:
+                    self._execution = None
+                    self._overrun = None
+                    self._guarded = False
             else:
-                # the waiting steps: predecessors of the start (0) or the end
-                # (_END_WAIT), the at-start requirement (1)
                 try:
-                    if step == 1:
-                        if not self._entered:
+                    if step == 0 or step == _END_WAIT:
+                        # the predecessors of the start or the end: all reached (or
+                        # none) needs no call, unless the plan is stopping
+                        found = (ctx.start_waits if step == 0 else ctx.end_waits)[rt.index]
+                        if self._next == len(found) and (
+                            step or not (ctx.draining or ctx.cancelled)
+                        ):
+                            status = _SUCCESS
+                        else:
+                            status, self._next = waits.wait_for_predecessors(
+                                ctx, rt, START if step == 0 else END, found, self._next
+                            )
+                    elif step == 1:
+                        if not self._entered:  # its timeout and when it gives up
                             self._entered = True
-                            self._timeout = ctx.options.at_start_timeout_for(rt.step.action)
-                            self._deadline = waits.at_start_deadline(ctx, rt, self._timeout)
-                        status = waits.wait_at_start_req(ctx, rt, self._deadline, self._timeout)
-                    else:
-                        point = START if step == 0 else END
-                        if not self._entered:
-                            self._entered = True
-                            self._waits = ctx.graph.waits(rt.index, point)
-                            self._next = 0
-                        status, self._next = waits.wait_for_predecessors(
-                            ctx, rt, point, self._waits, self._next
+                            self._enter_at_start_wait(ctx, rt)
+                        if not (ctx.draining or ctx.cancelled) and ctx.evaluator.holds(
+                            rt.ground.at_start, ctx.knowledge.state(), GROUND, rt.step.duration
+                        ):
+                            status = _SUCCESS
+                        else:
+                            status = waits.wait_at_start_req(ctx, rt, self._deadline, self._timeout)
+                    elif step == 2:
+                        # phases.apply_at_start_effect, written out
+                        applied = ctx.knowledge.apply(
+                            rt.ground.start_effect, GROUND, rt.step.duration
                         )
+                        rt.start_delta = EffectDelta(
+                            applied.added, applied.deleted, applied.fluents
+                        )
+                        ctx.action_started(rt)
+                        status = _SUCCESS
+                    elif step == 5:
+                        if ctx.evaluator.holds(
+                            rt.ground.at_end, ctx.knowledge.state(), GROUND, rt.step.duration
+                        ):
+                            status = _SUCCESS
+                        else:
+                            status = phases.check_at_end_req(ctx, rt)
+                    elif step == _LAST:
+                        ctx.knowledge.apply(rt.ground.end_effect, GROUND, rt.step.duration)
+                        ctx.action_ended(rt)
+                        status = _SUCCESS
+                    else:
+                        status = _SUCCESS  # every phase is over
+                        break
                 except PlansysBridgeError as exc:
-                    label = _AT_START_REQ if step == 1 else _PREDECESSORS
-                    rt.reason = f"{label}: {exc}"
-                    status = Status.FAILURE
-            if status != Status.SUCCESS:
-                return status
-            self._step = step + 1
+                    rt.reason = f"{_LABELS[step]}: {exc}"
+                    status = _FAILURE
+            if status is not _SUCCESS:
+                break
+            step += 1
             self._entered = False
+            self._next = 0
+        self._step = step
+        if status is _RUNNING:
+            self.status = _RUNNING
+            return
+        ctx.action_finished(rt, status is _SUCCESS)
+        self.status = _SUCCESS
 
-    def _run(self) -> Status:
-        """The reactive part: guards first (the overrun, then the over-all
-        requirement), then the execution."""
-        execution = self._execution
-        if execution is None and not self._guarded:
-            self._guarded = True
-            ctx, rt = self.ctx, self.rt
-            pct = ctx.options.overrun_for(rt.step.action)
-            if pct is not None and rt.step.duration > 0:
-                self._overrun = phases.OverrunPhase(ctx, rt, pct)
-                self._overrun.initialise()
-        overrun = self._overrun
-        if overrun is not None and overrun.step() != Status.SUCCESS:
-            self._halt_execution()
-            return Status.FAILURE
-        try:
-            status = phases.check_over_all_req(self.ctx, self.rt)
-        except PlansysBridgeError as exc:
-            self.rt.reason = f"{_OVER_ALL}: {exc}"
-            status = Status.FAILURE
-        if status != Status.SUCCESS:
-            self._halt_execution()
-            return status
-        if execution is None:
-            execution = self._execution = ExecutePhase(self.ctx, self.rt)
-            execution.initialise()
-        try:
-            status = execution.step()
-        except PlansysBridgeError as exc:
-            status = execution.fail(f"{execution.label}: {exc}")
-        if status != Status.RUNNING:
-            self._execution = None
-            self._overrun = None
-            self._guarded = False
-        return status
+    def _enter_at_start_wait(self, ctx: PlanContext, rt: ActionRuntime) -> None:
+        """The at-start wait's timeout, and the deadline it gives up at (registered
+        with the context, so a tick comes then)."""
+        options = ctx.options
+        timeout = self._timeout = (
+            options.at_start_timeout_for(rt.step.action)
+            if options.action_timeouts
+            else options.at_start_timeout
+        )
+        if timeout is not None:  # waits.at_start_deadline, written out
+            self._deadline = ctx.now() + timeout
+            ctx.schedule(self._deadline, rt.index)
+
+    def _guard(self, ctx: PlanContext, rt: ActionRuntime) -> None:
+        """Set up the guards of the run: the overrun's, when the action has one."""
+        options = ctx.options
+        pct = (
+            options.overrun_for(rt.step.action)
+            if options.action_timeouts
+            else options.overrun_percentage
+        )
+        if pct is not None and rt.step.duration > 0:
+            self._overrun = phases.OverrunPhase(ctx, rt, pct)
+            self._overrun.initialise()
 
     def _halt_execution(self) -> None:
         if self._execution is not None:

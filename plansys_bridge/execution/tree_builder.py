@@ -5,8 +5,9 @@ is done) with one branch per action; the graph's orderings live in each branch's
 wait for its predecessors, so actions run exactly as concurrently as their
 dependencies allow (no hand-made nesting of sequences, which is where PlanSys2
 #155/#184/#331 went wrong). Unlike py_trees' ``Parallel`` it ticks only branches
-that can move: a branch parked in ``WaitForPredecessors`` is ticked again only when
-one of its predecessors starts, ends or stops, and a standard branch whose performer
+that can move: a standard branch parked in ``WaitForPredecessors`` is ticked again
+only when the happening it waits for takes place (or its action stops), a template's
+when one of its predecessors starts, ends or stops, and a standard branch whose performer
 is at work only when the performer ends, a deadline passes or the knowledge its
 over-all requirement reads changes, so a tick costs what happened, not the size of
 the plan.
@@ -147,12 +148,23 @@ class PlanRoot(py_trees.composites.Composite):
     def __init__(
         self, name: str, ctx: PlanContext, children: list[py_trees.behaviour.Behaviour]
     ) -> None:
-        super().__init__(name, children)
+        super().__init__(name)
+        # Composite.add_child's work, without its call per branch and without asking
+        # each branch for its id (a standard action makes its uuid on first use)
+        for child in children:
+            if child.parent is not None:
+                raise RuntimeError(
+                    f"behaviour '{child.name}' already has parent '{child.parent.name}'"
+                )
+            child.parent = self
+        self.children = children
         self.ctx = ctx
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         """py_trees' generator tick: yields each branch ticked, then the root."""
         self._enter()
+        if self.ctx.touched:
+            self._touch()
         for child in self._due():
             if type(child) is StandardAction:
                 child.tick_step()
@@ -167,14 +179,20 @@ class PlanRoot(py_trees.composites.Composite):
         executor ticks: a standard branch is stepped by a plain call, so a tick
         costs a call per branch that can move and nothing per finished or waiting
         branch."""
-        self._enter()
+        if self.status != Status.RUNNING:
+            self._enter()
+        if self.ctx.touched:
+            self._touch()
         for child in self._due():
             if type(child) is StandardAction:
                 child.tick_step()
             else:
                 for _ in child.tick():
                     pass
-        self._settle()
+        if self.ctx.unfinished:  # _settle(), inlined: a call per tick
+            self.status = Status.RUNNING
+        else:
+            self.stop(Status.SUCCESS)
 
     def _due(self) -> list[py_trees.behaviour.Behaviour]:
         """The branches a tick steps, in plan order: active (neither parked nor
@@ -187,6 +205,17 @@ class PlanRoot(py_trees.composites.Composite):
             for index in sorted(self.ctx.active)
             if not actions[index].finished and children[index].status not in done
         ]
+
+    def _touch(self) -> None:
+        """The standard branches not yet ticked whose predecessors moved
+        (``PlanContext.touched``) are RUNNING from now on, as the tick that found
+        them waiting used to make them."""
+        actions, children = self.ctx.actions, self.children
+        for index in self.ctx.touched:
+            child = children[index]
+            if child.status == Status.INVALID and not actions[index].finished:
+                child.status = Status.RUNNING
+        self.ctx.touched.clear()
 
     def _enter(self) -> None:
         if self.status != Status.RUNNING:
@@ -206,8 +235,11 @@ def build_tree(ctx: PlanContext) -> PlanRoot:
     """A :class:`PlanRoot` with a branch per action: a :class:`StandardAction`, or
     a template's subtree wrapped in an :class:`ActionBranch`."""
     branches: list[py_trees.behaviour.Behaviour] = []
+    options = ctx.options
+    # options.template_for(), as a look-up: once per action
+    template_for, default = options.templates.get, options.action_template
     for rt in ctx.actions:
-        template = ctx.options.template_for(rt.step.action)
+        template = template_for(rt.step.action, default)
         rt.may_rest = template is None
         if template is None:
             branches.append(StandardAction(ctx, rt))
@@ -215,6 +247,7 @@ def build_tree(ctx: PlanContext) -> PlanRoot:
         subtree = template(ActionNodes(ctx, rt))
         _check_template(subtree, rt)
         branches.append(ActionBranch(ctx, rt, subtree))
+    ctx.park_waiting()
     return PlanRoot(f"plan {ctx.plan_id}/{ctx.plan_index}", ctx, branches)
 
 

@@ -38,7 +38,8 @@ def wait_for_predecessors(
     ``point="end"``: before its at-end effects (PlanSys2's CHECK_PREV_ACTIONS).
     Fails when a predecessor stopped without reaching that happening, and (for the
     start) once the plan is stopping, so nothing new starts after a failure. A
-    branch left waiting is parked until a predecessor moves on.
+    branch left waiting is parked until the happening it waits for takes place
+    (:meth:`PlanContext.park_on`).
     """
     if point == START and (ctx.draining or ctx.cancelled):
         rt.skipped = True
@@ -54,9 +55,9 @@ def wait_for_predecessors(
             if other.finished:
                 if point == START:
                     rt.skipped = True
-                rt.reason = f"predecessor {other.text} stopped before its {other_point}"
+                rt.reason = f"predecessor {other.step.text} stopped before its {other_point}"
                 return _FAILURE, n
-            ctx.park(rt.index)
+            ctx.park_on(rt, j, other_point)
             return _RUNNING, n
     return _SUCCESS, len(waits)
 
