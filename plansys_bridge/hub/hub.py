@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Hashable, Iterable, Sequence
+from typing import TYPE_CHECKING
 
 from plansys_bridge.clock import Clock, WallClock
 from plansys_bridge.hub.liveness import LivenessTable
@@ -27,7 +28,6 @@ class Hub:
         self.transport: Transport = transport if transport is not None else InProcessTransport()
         self.clock: Clock = clock if clock is not None else WallClock()
         self._routers: dict[str, TopicRouter] = {}
-        self._liveness: LivenessTable | None = None
         self.publish: Callable[[str, object], None] = self.transport.publish
         """``publish(topic, msg)``: the transport's own method, bound once, so a message
         costs no call of the hub's (an action's auction publishes about ten)."""
@@ -76,14 +76,21 @@ class Hub:
             self._routers[topic] = router
         return router
 
-    @property
-    def liveness(self) -> LivenessTable:
-        """The heartbeat table of this hub (subscribed on first use)."""
-        if self._liveness is None:
-            table = self._liveness = LivenessTable()
+    liveness: LivenessTable
+    """The heartbeat table of this hub, made and subscribed on first use (by
+    ``__getattr__``); from then on a plain attribute, read without a call (every
+    auction client reads it, once per action)."""
+
+    if not TYPE_CHECKING:  # (hidden from mypy: no other name may pass for an attribute)
+
+        def __getattr__(self, name: str) -> LivenessTable:
+            if name != "liveness" or "_routers" not in self.__dict__:
+                raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+            table = LivenessTable()
             # A change of state's statuses (one per action served) in one call
             self._router(Topics.PERFORMERS_STATUS).add(table.on_status, None, table.on_statuses)
-        return self._liveness
+            self.liveness = table
+            return table
 
     async def start(self) -> None:
         await self.transport.start()
@@ -92,7 +99,7 @@ class Hub:
         for router in self._routers.values():
             router.close()
         self._routers.clear()
-        self._liveness = None
+        self.__dict__.pop("liveness", None)  # a new table on next use
         await self.transport.close()
 
     def now(self) -> float:

@@ -83,7 +83,11 @@ class LivenessTable:
         self._watchers[action] = [*self._watchers.get(action, ()), callback]
 
         def unwatch() -> None:
-            remaining = [c for c in self._watchers.get(action, ()) if c is not callback]
+            watchers = self._watchers.get(action, ())
+            if len(watchers) == 1 and watchers[0] is callback:  # the usual: alone
+                del self._watchers[action]
+                return
+            remaining = [c for c in watchers if c is not callback]
             if remaining:
                 self._watchers[action] = remaining
             else:

@@ -266,12 +266,18 @@ class TopicRouter:
             self._everyone = [s for s in self._everyone if s is not sub]
             self._rewire()
             return
+        keyed = self._keyed
         for key in sub.routes:
-            remaining = [s for s in self._keyed.get(key, ()) if s is not sub]
+            subs = keyed.get(key, ())
+            if len(subs) == 1 and subs[0] is sub:
+                # its own route (a client's request id): no list to filter, once per action
+                del keyed[key]
+                continue
+            remaining = [s for s in subs if s is not sub]
             if remaining:
-                self._keyed[key] = remaining
+                keyed[key] = remaining
             else:
-                self._keyed.pop(key, None)
+                keyed.pop(key, None)
         for action in sub.specs:
             route = ("action", action)
             left = [s for s in self._specialised_subs.get(route, ()) if s is not sub]

@@ -147,3 +147,43 @@ def test_a_hub_hands_a_change_of_state_to_its_table_in_one_call() -> None:
         await hub.close()
 
     run(main(), VirtualClock())
+
+
+def test_the_hub_makes_one_table_until_closed_and_no_other_name() -> None:
+    async def main() -> None:
+        hub = Hub(InProcessTransport(), VirtualClock())
+        await hub.start()
+        table = hub.liveness
+        assert hub.liveness is table
+        try:
+            hub.no_such_thing  # type: ignore[attr-defined]  # noqa: B018
+        except AttributeError as exc:
+            assert "no_such_thing" in str(exc)
+        else:
+            raise AssertionError("an unknown attribute was found")
+        await hub.close()
+        assert "liveness" not in vars(hub)  # made again on next use (as before: none closed)
+
+    run(main(), VirtualClock())
+
+
+@settings(max_examples=100, deadline=None)
+@given(order=st.permutations(range(3)), watched=st.lists(st.integers(0, 2), min_size=1))
+def test_unwatching_in_any_order_leaves_exactly_the_others(
+    order: list[int], watched: list[int]
+) -> None:
+    async def main() -> None:
+        table = LivenessTable()
+        told: list[int] = []
+        stops = {i: table.watch("move", lambda m, i=i: told.append(i)) for i in set(watched)}
+        for i in order:
+            if i in stops:
+                stops.pop(i)()
+                running = performer_statuses(0.0, PerformerState.RUNNING, [("move", ())], "n")
+                ready = performer_statuses(0.0, PerformerState.READY, [("move", ())], "n")
+                told.clear()
+                table.on_statuses(running)
+                table.on_statuses(ready)
+                assert told == sorted(stops)
+
+    run(main(), VirtualClock())

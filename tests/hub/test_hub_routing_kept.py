@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from plansys_bridge.hub.messages import ExecutionType, Topics, action_execution
-from plansys_bridge.hub.routing import TopicRouter, arguments_match, performer_keys
+from plansys_bridge.hub.routing import TopicRouter, arguments_match, client_keys, performer_keys
 from plansys_bridge.hub.transport import Subscription
 
 VALUES = st.sampled_from(["", "r1", "r2"])
@@ -70,3 +70,30 @@ def test_a_kept_answer_is_forgotten_when_the_performers_change() -> None:
     first.close()
     router.dispatch(msg)
     assert heard == ["a", "a", "b", "b"]
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    keys=st.lists(st.sampled_from(["q1", "q2"]), min_size=1, max_size=4),
+    order=st.permutations(range(4)),
+)
+def test_leaving_a_route_alone_or_shared_leaves_the_others(
+    keys: list[str], order: list[int]
+) -> None:
+    router = TopicRouter(Topics.ACTIONS_HUB)
+    heard: list[int] = []
+    subs = {
+        i: router.add(lambda m, i=i: heard.append(i), client_keys(rid, "move", ("r1",)))
+        for i, rid in enumerate(keys)
+    }
+    for i in order:
+        if i not in subs:
+            continue
+        subs.pop(i).close()
+        for rid in ("q1", "q2"):
+            heard.clear()
+            router.dispatch(
+                action_execution(ExecutionType.FINISH, "p", "move", ("r1",), request_id=rid)
+            )
+            assert heard == [j for j in sorted(subs) if keys[j] == rid]
+    assert len(router) == 0
