@@ -10,10 +10,12 @@ and the knowledge at the end.
 
 from __future__ import annotations
 
+import uuid
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, replace
 from types import SimpleNamespace
 
+import py_trees
 import pytest
 from execution_helpers import Event, PerformerSpec, knowledge_from, load_domain, run_scenario
 
@@ -189,3 +191,29 @@ def test_a_deadline_wakes_its_resting_owner_only() -> None:
     ctx.pass_deadlines()
     assert ctx.resting == {1} and ctx.active == {0}
     assert ctx.next_deadline() == ctx.now() + 1.0
+
+
+def test_a_standard_action_has_what_a_py_trees_behaviour_has() -> None:
+    """StandardAction sets Behaviour.__init__'s attributes itself; its uuid, logger
+    and tick generator are made on first use, as py_trees would have made them."""
+    ctx = _context(PLAN)
+    root = build_tree(ctx)
+    first, second = root.children[:2]
+    reference = py_trees.behaviours.Success(first.name)
+    made_on_use = {"id", "logger", "iterator"}
+    assert set(vars(reference)) - set(vars(first)) == made_on_use
+    for key, value in vars(reference).items():
+        if key == "qualified_name":
+            assert first.qualified_name == f"StandardAction/{first.name}"
+        elif key == "parent":
+            assert first.parent is root and second.parent is root
+        elif key not in made_on_use:
+            assert getattr(first, key) == value, key
+    assert isinstance(first.id, uuid.UUID) and first.id == first.id != second.id
+    assert first.logger.prefix == py_trees.logging.Logger(first.name).prefix
+    ctx.hub.publish = lambda *_a: None  # type: ignore[attr-defined]  # the info is not looked at
+    ctx.draining = True  # the branch ends at its first phase, without a performer
+    assert list(first.iterator) == [first]  # the generator tick, stepping the branch
+    assert ctx.actions[0].finished and ctx.actions[0].skipped
+    with pytest.raises(AttributeError, match="no_such_thing"):
+        _ = first.no_such_thing
