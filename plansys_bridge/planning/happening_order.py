@@ -8,6 +8,8 @@ and the orderings found between them are reduced to those a reader needs.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from itertools import repeat
+from operator import add, itemgetter
 
 from plansys_bridge.planning.orderings import END, START, Point
 from plansys_bridge.planning.plan import PlanStep
@@ -19,17 +21,20 @@ def happening_order(steps: Sequence[PlanStep]) -> list[int]:
     """Every happening of ``steps`` in the order the plan makes them happen: by time
     (rounded to the microsecond), ends of actions with a duration first, then by
     step, starts before ends. The keys are made in two comprehensions, without a
-    key call (or an append) per happening; a step without duration rounds its
-    time once."""
-    starts = [round(step.time, 6) for step in steps]
-    keys = [(start, 1, i, 0) for i, start in enumerate(starts)]
+    key call (or an append) per happening; the times are rounded by ``map`` (no
+    bytecode per time), and a happening is its key's last item (``2*step+point``
+    orders as ``(step, point)``)."""
+    times = [step.time for step in steps]
+    durations = [step.duration for step in steps]
+    starts = list(map(round, times, repeat(6)))
+    ends = list(map(round, map(add, times, durations), repeat(6)))
+    keys = [(start, 1, 2 * i) for i, start in enumerate(starts)]
     keys += [
-        (starts[i], 1, i, 1)
-        if step.duration <= 0
-        else (round(step.time + step.duration, 6), 0, i, 1)
-        for i, step in enumerate(steps)
+        (starts[i], 1, 2 * i + 1) if duration <= 0 else (ends[i], 0, 2 * i + 1)
+        for i, duration in enumerate(durations)
     ]
-    return [2 * i + point for _, _, i, point in sorted(keys)]
+    keys.sort()
+    return list(map(itemgetter(2), keys))
 
 
 def point_of(h: int) -> Point:

@@ -31,7 +31,7 @@ from __future__ import annotations
 import gc
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from functools import cached_property
-from typing import TypeVar
+from typing import NamedTuple, TypeVar
 
 import networkx as nx
 
@@ -109,15 +109,17 @@ class PlanGraph:
         *,
         links: Links[VarHistory] | None = None,
         order: Sequence[int] | None = None,
+        happenings: Sequence[int] | None = None,
+        later: _Later | None = None,
     ) -> None:
         self.plan = plan
         self.steps = steps
         self.ground = ground
         self.unexplained = unexplained
-        self.achievers: Mapping[Atom, int] = achievers if achievers is not None else {}
-        """For every atom true at the end of the plan, the step whose effect last set it."""
-        self.final_state = final_state
-        """The state the plan leads to, simulated from the knowledge it was built on."""
+        if later is None:
+            self.__dict__["achievers"] = achievers if achievers is not None else {}
+            self.__dict__["final_state"] = final_state
+        self._later = later
         self._links = links if orderings is None else None
         pairs: Sequence[tuple[int, int]]
         if self._links is None:
@@ -129,12 +131,31 @@ class PlanGraph:
         else:
             pairs = self._links.pairs
         self._start_waits, self._end_waits = waits_of(pairs, len(steps))
-        self._order = (
-            list(order)
-            if order is not None
-            else list(dict.fromkeys([h >> 1 for h in happening_order(steps)]))
-        )
+        if order is not None:
+            self.__dict__["_order"] = list(order)
+        self._happenings = happenings
+
+    @cached_property
+    def achievers(self) -> Mapping[Atom, int]:
+        """For every atom true at the end of the plan, the step whose effect last
+        set it (made when first asked: the executor does not ask)."""
+        assert self._later is not None  # set in __init__ otherwise
+        return _acyclic(self._later.achievers)
+
+    @cached_property
+    def final_state(self) -> State | None:
+        """The state the plan leads to, simulated from the knowledge it was built on
+        (made when first asked, in one change from the simulation's last state)."""
+        assert self._later is not None  # set in __init__ otherwise
+        return _acyclic(self._later.final_state)
+
+    @cached_property
+    def _order(self) -> list[int]:
         """The steps in the order of their first happening."""
+        happenings = self._happenings
+        if happenings is None:
+            happenings = happening_order(self.steps)
+        return list(dict.fromkeys([h >> 1 for h in happenings]))
 
     @cached_property
     def orderings(self) -> tuple[Ordering, ...]:
@@ -244,6 +265,13 @@ class PlanGraph:
 # ---------------------------------------------------------------- building
 
 
+class _Later(NamedTuple):
+    """What a built graph makes only when asked (from the builder's tables)."""
+
+    final_state: Callable[[], State]
+    achievers: Callable[[], dict[Atom, int]]
+
+
 def build_plan_graph(
     plan: Plan,
     domain: Domain,
@@ -284,16 +312,18 @@ def _build(plan: Plan, domain: Domain, state: State, ev: Evaluator, reduce: bool
     builder = GraphBuilder(plan.steps, domain, state, ev)
     ground, moves = builder.ground()
     order = happening_order(builder.steps)
-    final = builder.simulate(ground, moves, order)
+    builder.simulate(ground, moves, order)
     kept = transitive_reduction(order, builder.succ, builder.pos) if reduce else builder.edges
-    achievers = {hist.var[1]: i for hist, i in builder.achieved.items()}
+    achieved = builder.achieved
     return PlanGraph(
         plan=plan,
         steps=builder.steps,
         ground=ground,
         unexplained=tuple(builder.unexplained),
-        achievers=achievers,  # type: ignore[arg-type]
-        final_state=final,
         links=Links(sorted_pairs(kept, order, builder.pos), builder.edges, subject_text),
-        order=list(dict.fromkeys([h >> 1 for h in order])),
+        happenings=order,
+        later=_Later(
+            builder.final_state,
+            lambda: {hist.var[1]: i for hist, i in achieved.items()},  # type: ignore[misc]
+        ),
     )

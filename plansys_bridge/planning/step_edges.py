@@ -53,12 +53,27 @@ def sorted_pairs(
 
 
 def waits_of(pairs: Iterable[tuple[int, int]], n: int) -> tuple[Waits, Waits]:
-    """Each of the ``n`` steps' start and end waits, in the order of ``pairs``."""
-    start_waits: list[list[tuple[int, Point]]] = [[] for _ in range(n)]
-    end_waits: list[list[tuple[int, Point]]] = [[] for _ in range(n)]
+    """Each of the ``n`` steps' start and end waits, in the order of ``pairs``.
+
+    The builder's pairs come grouped by target (sorted by its plan position), so a
+    target's waits are gathered in one run and made a tuple once; a target seen
+    again later (orderings given in another order) gets the run added to its
+    tuple. A step with no waits shares the empty tuple."""
+    waits: list[tuple[tuple[int, Point], ...]] = [()] * (2 * n)
+    points = _POINTS
+    run: list[tuple[int, Point]] = []
+    target = -1
     for src, dst in pairs:
-        (end_waits if dst & 1 else start_waits)[dst >> 1].append((src >> 1, _POINTS[src & 1]))
-    return [tuple(w) for w in start_waits], [tuple(w) for w in end_waits]
+        if dst != target:
+            if run:
+                waits[target] += tuple(run)
+            target = dst
+            run = [(src >> 1, points[src & 1])]
+        else:
+            run.append((src >> 1, points[src & 1]))
+    if run:
+        waits[target] += tuple(run)
+    return waits[0::2], waits[1::2]
 
 
 class Links(Generic[_Subject]):

@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 from plansys_bridge.knowledge.evaluation import Evaluator
 from plansys_bridge.knowledge.state import State
 from plansys_bridge.pddl.parser import parse_domain
-from plansys_bridge.planning import graph_builder
+from plansys_bridge.planning import ground_moves
 from plansys_bridge.planning.effect_access import condition_vars, effect_access, literal_atoms
 from plansys_bridge.planning.happening_order import happening_order
 from plansys_bridge.planning.orderings import GROUND
@@ -96,9 +96,9 @@ def plans(draw: st.DrawFn) -> Plan:
 def general_way() -> Iterator[None]:
     """Nothing kept per ground action, no plain effects, every over-all watched."""
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(graph_builder, "reads_fixed", lambda cond, derived: False)
-        mp.setattr(graph_builder, "writes_fixed", lambda effect: False)
-        mp.setattr(graph_builder, "written_names", lambda effect: None)
+        mp.setattr(ground_moves, "reads_fixed", lambda cond, derived: False)
+        mp.setattr(ground_moves, "writes_fixed", lambda effect: False)
+        mp.setattr(ground_moves, "written_names", lambda effect: None)
         yield
 
 

@@ -14,7 +14,7 @@ from execution_helpers import knowledge_from, load_domain
 from test_plan_graph import FACTORY_PLAN
 
 from plansys_bridge.errors import ExecutionError
-from plansys_bridge.planning import graph_builder
+from plansys_bridge.planning import ground_moves
 from plansys_bridge.planning.plan import parse_plan
 from plansys_bridge.planning.plan_graph import build_plan_graph
 
@@ -75,7 +75,7 @@ def test_plain_effects_and_the_general_path_agree(monkeypatch: pytest.MonkeyPatc
     domain = load_domain("factory.pddl")
     k = knowledge_from(domain, "problem_factory_1.pddl")
     plain = build_plan_graph(parse_plan(PLAN), domain, k.state())
-    monkeypatch.setattr(graph_builder, "writes_fixed", lambda effect: False)
+    monkeypatch.setattr(ground_moves, "writes_fixed", lambda effect: False)
     general = build_plan_graph(parse_plan(PLAN), domain, k.state())
     assert plain.achievers and plain.achievers == general.achievers
     assert plain.orderings == general.orderings
