@@ -39,6 +39,7 @@ from plansys_bridge.hub.auction_policy import (
     action_outcome,
     full_action_name,
 )
+from plansys_bridge.hub.auction_supervision import Supervision
 from plansys_bridge.hub.driven_future import DrivenFuture
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.liveness import LivenessTable, could_serve
@@ -74,13 +75,15 @@ _AUCTION = ClientPhase.AUCTION
 _EXECUTING = ClientPhase.EXECUTING
 
 
-class ActionClient(DrivenFuture[ActionOutcome]):
+class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
     """Runs the auction for one action instance and follows it to its end.
 
     ``await run()`` returns an :class:`ActionOutcome` (it never raises for a failed
     action); ``cancel()`` stops it from outside, and so does cancelling the task that
     awaits ``run()`` or the future ``start()`` returns. Either way the confirmed
     performer receives a CANCEL.
+
+    Following the confirmed performer is :class:`~.auction_supervision.Supervision`'s.
     """
 
     # Defaults read from the class until a client sets its own (immutable values):
@@ -303,71 +306,6 @@ class ActionClient(DrivenFuture[ActionOutcome]):
         if self._lost:
             why += f" (after losing {', '.join(self._lost)})"
         self._finish(False, why, gave_up=True)
-
-    # ------------------------------------------------------------------ execution
-
-    def _on_supervised(self, msg: ActionExecution) -> None:
-        """A message while the confirmed performer works."""
-        node = msg.node_id
-        winner = self.performer
-        kind = msg.type
-        if kind is _RESPONSE:
-            if node != winner:
-                self._send(_REJECT, node)  # late responder
-            return
-        if node != winner:
-            return  # a lost performer's late words; it was cancelled
-        self._last_seen = self._loop.time()
-        if kind is _FEEDBACK:
-            self.completion = float(msg.completion)
-            self.status = msg.status
-            if self._feedback_cb is not None:
-                try:
-                    self._feedback_cb(self.completion, self.status)
-                except Exception as exc:
-                    self._fail(exc)
-            return
-        # FINISH
-        self.completion = 1.0 if msg.success else max(self.completion, float(msg.completion))
-        self._finish(msg.success, msg.status or ("succeeded" if msg.success else "failed"))
-
-    def _check_alive(self) -> None:
-        """The timer in execution: is the confirmed performer still heard from?"""
-        loop = self._loop
-        timeout = self.policy.liveness_timeout
-        while True:
-            deadline = self._last_seen + timeout
-            if loop.time() < deadline:
-                self._arm(deadline)
-                return
-            liveness = self._liveness
-            heard = liveness.last_running(self.performer) if liveness is not None else None
-            if heard is None or heard <= self._last_seen:
-                self._performer_lost()
-                return
-            self._last_seen = heard  # its RUNNING heartbeats kept it alive
-
-    def _performer_lost(self) -> None:
-        # Stop it in case it is only mute, and never pick it again.
-        winner = self.performer
-        self._send_cancel()
-        self._excluded = self._excluded | {winner}
-        self._lost = (*self._lost, winner)
-        reauctioned = self._reauctioned
-        if reauctioned >= self.policy.reauctions:
-            why = (
-                f"performer {winner} lost: neither feedback nor heartbeat for "
-                f"{self.policy.liveness_timeout:g} s"
-            )
-            why += (
-                f"; re-auctioned {reauctioned} time(s), giving up"
-                if reauctioned
-                else "; re-auction disabled"
-            )
-            self._finish(False, why)
-            return
-        self._reauctioned += 1
-        self._begin_auction()
 
     # ------------------------------------------------------------------ plumbing
 
