@@ -186,35 +186,34 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
         again and again, nearly always in that case; then no dict of what went and
         came needs to be made and compared, which ``swap`` does per call."""
         data, seq = self._data, self._seq
-        usual = True
-        for key in gone:
-            if key not in data:
-                usual = False
-        for key in fresh:
-            if key in data:
-                usual = False
-        if not usual:
-            return False
-        # as in swap: what a failure half way must put back
-        lost: dict[K, tuple[V, int]] = {}
-        new: dict[K, None] = {}
-        nxt = self._next
-        writes = 0
+        # What a failure half way must put back, read as the check reads the keys
+        # (a subscript fails for a key that is not there): each key is hashed as
+        # few times as can be, and a fact's hash is a call of its own.
+        kept: tuple[tuple[V, int], ...] = ()
         try:
             for key in gone:
-                lost[key] = (data[key], seq[key])
+                kept += ((data[key], seq[key]),)
+        except KeyError:
+            return False
+        for key in fresh:
+            if key in data:
+                return False
+        first = nxt = self._next
+        try:
+            for key in gone:
                 del data[key]
                 del seq[key]
-                writes += 1
             for key in came:
                 data[key] = value
                 seq[key] = nxt
                 nxt += 1
-                new[key] = None
         except BaseException:
-            self._put_back(new, {}, lost)
+            # every key of gone back as it was, every fresh key of came away,
+            # wherever the failure came (plain tuples: no iteration of their own)
+            lost = dict(zip(gone[:], kept, strict=True))
+            self._put_back({k: None for k in came[:] if k not in lost}, {}, lost)
             raise
-        self.writes += writes + nxt - self._next
+        self.writes += len(kept) + nxt - first
         self._next = nxt
         return True
 
