@@ -190,9 +190,11 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
         # (a subscript fails for a key that is not there): each key is hashed as
         # few times as can be, and a fact's hash is a call of its own.
         kept: tuple[tuple[V, int], ...] = ()
+        writes = 0
         try:
             for key in gone:
                 kept += ((data[key], seq[key]),)
+                writes += 1
         except KeyError:
             return False
         for key in fresh:
@@ -213,7 +215,7 @@ class JournaledTable(Mapping[K, V], Generic[K, V]):
             lost = dict(zip(gone[:], kept, strict=True))
             self._put_back({k: None for k in came[:] if k not in lost}, {}, lost)
             raise
-        self.writes += len(kept) + nxt - first
+        self.writes += writes + nxt - first
         self._next = nxt
         return True
 
