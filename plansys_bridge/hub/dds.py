@@ -9,9 +9,10 @@ the project's wrapper topics for fields PlanSys2 lacks (see
 
 Delivery: one reader thread per transport waits on a DDS wait set, takes the samples
 of the readers that have some (:mod:`~plansys_bridge.hub.dds_intake`), and hands what
-one wake-up took, as one batch, to an
-:class:`~plansys_bridge.hub.transport.InProcessTransport` that fans it out to this
-process's subscribers on the asyncio loop (one ``call_soon_threadsafe`` per batch):
+one wake-up took to the loop in one ``call_soon_threadsafe``, where each reader's
+messages go as one batch (``publish_many``) to an
+:class:`~plansys_bridge.hub.transport.InProcessTransport` that fans them out to this
+process's subscribers:
 callbacks run on the loop, in arrival order per topic
 (DDS orders per writer; messages of different topics or writers may interleave
 differently than in the in-process transport). A message a transport publishes
@@ -405,15 +406,31 @@ class DdsTransport:
     # -- receiving ---------------------------------------------------------------------
     def _poll(self, fired: list[int]) -> None:
         """On the reader thread: take what the readers whose condition fired hold (in
-        the order of the endpoints), hand it to the loop in one batch."""
-        batch: list[tuple[str, object]] = []
+        the order of the endpoints), hand it to the loop in one call, as one batch
+        per endpoint (one hub topic each)."""
+        runs: list[tuple[str, list[object]]] = []
         endpoints = self._endpoints
         take = self._intake.take
         count = len(endpoints)
         for key in sorted(k for k in fired if k and k <= count):
-            take(endpoints[key - 1], batch)
-        if batch:
-            self._fanout.publish_batch(batch)
+            ep = endpoints[key - 1]
+            taken: list[object] = []
+            take(ep, taken)
+            if taken:
+                runs.append((ep.route.hub_topic, taken))
+        if runs:
+            if self._closed or self._loop is None:
+                raise HubError("DDS transport closed")  # ends the reader thread
+            self._loop.call_soon_threadsafe(self._deliver, runs)
+
+    def _deliver(self, runs: list[tuple[str, list[object]]]) -> None:
+        """On the loop: what the reader thread took goes to the fan-out, each batch in
+        one call (a hub's router that takes batches gets it so)."""
+        fanout = self._fanout
+        if fanout.closed:
+            return
+        for topic, messages in runs:
+            fanout.publish_many(topic, messages)
 
     def __repr__(self) -> str:
         state = "closed" if self._closed else "started" if self._dds.running else "new"

@@ -4,7 +4,7 @@ The reader thread of a :class:`~plansys_bridge.hub.dds.DdsTransport` wakes when
 samples arrive and asks an :class:`Intake` to take those of the readers whose
 condition fired (not every reader of every topic: with an auction's samples all on
 one topic, taking from the idle readers was a good part of a wake-up). Each sample
-becomes ``(hub topic, message)`` in arrival order, or is dropped with one log line
+becomes a message of the endpoint's hub topic, in arrival order, or is dropped with one log line
 naming the DDS topic and the writer (its GUID and its participant's) when it cannot
 be read or fails the transport's check: a foreign node's bad sample costs that
 sample only, never the connection or the other samples of the batch.
@@ -63,8 +63,9 @@ class Intake:
         self.dropped = 0
         self._project_writers: set[int] = set()
 
-    def take(self, ep: Endpoint, batch: list[tuple[str, object]]) -> None:
-        """Append ``(hub topic, message)`` for each sample ``ep`` has, in order."""
+    def take(self, ep: Endpoint, batch: list[object]) -> None:
+        """Append the hub message of each sample ``ep`` has, in order (all of the
+        endpoint's hub topic)."""
         skip_marked = not ep.channel.project and ep.route.project is not None
         topic = ep.route.hub_topic
         read = ep.channel.read
@@ -90,13 +91,13 @@ class Intake:
                     if quick and msg.__class__ is ActionExecution:
                         bid = msg.bid
                         if (bid is None or bid >= 0) and 0.0 <= msg.completion <= 1.0:
-                            append((topic, msg))
+                            append(msg)
                             continue
                     reason = check(topic, msg)
                 except Exception as exc:  # a foreign writer's malformed sample
                     reason = str(exc)
                 if reason is None:
-                    append((topic, msg))
+                    append(msg)
                     continue
                 self.dropped += 1
                 log.warning(
