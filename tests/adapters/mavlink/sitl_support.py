@@ -6,7 +6,8 @@
   the mode, as Mission Planner or MAVProxy would next to the adapter;
 * :class:`Relay`: a TCP link between the adapter and SITL that a test can cut;
 * :func:`sitl_mission`: a shipped mission file with its vehicles pointed at SITL;
-* :func:`run_cli`: ``plansys-bridge run MISSION --json`` in a child process.
+* :func:`run_cli`: ``plansys-bridge run MISSION --json`` in a child process;
+* :class:`RealTimeFleet`: the fleet mission at speedup 1, flying in the background.
 """
 
 from __future__ import annotations
@@ -27,15 +28,24 @@ from typing import Any
 
 import yaml
 from mavlink_support import CONFIGS
+from plansys_bridge_adapters.mavlink.errors import LinkError
 from plansys_bridge_adapters.mavlink.geo import GeoPoint, distance_3d_m
 from plansys_bridge_adapters.mavlink.headway import Headway
 from plansys_bridge_adapters.mavlink.modes import Model, mode_name, mode_number, model_of_type
-from plansys_bridge_adapters.mavlink.sitl import DEFAULT_HOME, SitlProcess, instance_free
+from plansys_bridge_adapters.mavlink.sitl import (
+    DEFAULT_HOME,
+    SitlProcess,
+    instance_free,
+    missing,
+    sitl_dir,
+)
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as ml
 
 SITL_TIMEOUTS = {"connect": 60, "heartbeat": 5, "command": 2, "ekf": 240, "arm": 60, "action": 300}
 """Wall-clock limits for SITL runs (the EKF takes ~42 simulated seconds)."""
+ROVER_HOME = GeoPoint(DEFAULT_HOME.lat, 149.165600, DEFAULT_HOME.alt)
+"""The fleet's rover starts 34 m east of the copter (the configs' double homes)."""
 GCS_SYSID = 250
 """The second ground station's system id: not the adapter's 255, so ArduPilot keeps
 their links apart and its GCS failsafe keeps watching the adapter's heartbeat."""
@@ -412,3 +422,79 @@ def assert_succeeded(report: Mapping[str, Any]) -> None:
     assert report["records"], describe(report)
     assert all(r["status"] == "SUCCEEDED" for r in report["records"]), describe(report)
     assert report["replans"] == 0, describe(report)
+
+
+# ------------------------------------------------------------ real-time fleet
+@dataclass
+class RealTimeFleet:
+    """The fleet mission with copter and rover at speedup 1, started early and checked
+    late: in real time the mission mostly waits (42 s until the EKF uses GPS, then the
+    flights at their real speeds, about two minutes in all), so other tests run
+    meanwhile instead of the suite waiting for it."""
+
+    copter: SitlProcess | None = None
+    rover: SitlProcess | None = None
+    proc: subprocess.Popen[str] | None = None
+    skipped: str | None = None
+    """Why the fleet was not started: no SITL."""
+    error: Exception | None = None
+    """What went wrong starting it: raised by :meth:`started` in the check, not in
+    whichever test happened to start it."""
+    launcher: Sitl | None = None
+
+    @classmethod
+    def start(cls, workdir: Path) -> RealTimeFleet:
+        folder = sitl_dir()
+        reason = missing(folder)
+        if reason is not None:
+            return cls(skipped=reason)
+        assert folder is not None
+        fleet = cls(launcher=Sitl(folder, workdir))
+        try:
+            assert fleet.launcher is not None
+            fleet.copter = fleet.launcher.start("copter", speedup=1.0)
+            fleet.rover = fleet.launcher.start("rover", speedup=1.0, home=ROVER_HOME)
+            urls = {"uav1": fleet.copter.url, "ugv1": fleet.rover.url}
+            fleet.proc = start_cli(sitl_mission("mavlink_fleet.yaml", urls, workdir))
+        except (LinkError, OSError) as exc:
+            fleet.error = exc
+            fleet.close()
+            return fleet
+        fleet._wait_connected(timeout=30.0)
+        return fleet
+
+    def _wait_connected(self, timeout: float) -> None:
+        """Until the adapter has connected to both vehicles (SITL logs it), or the
+        mission ended: the mission's start-up, a burst of work for the machine, is then
+        over before the next test starts its own vehicle. A mission slower than that
+        is left to the check."""
+        deadline = time.monotonic() + timeout
+        for vehicle in (self.copter, self.rover):
+            assert vehicle is not None and self.proc is not None
+            said = f"Connection on serial port {vehicle.port}"
+            while said not in _read_log(vehicle.log_path) and self.proc.poll() is None:
+                if time.monotonic() > deadline:
+                    return
+                time.sleep(0.1)
+
+    def started(self) -> tuple[SitlProcess, SitlProcess, subprocess.Popen[str]]:
+        """The running fleet; raises what went wrong starting it."""
+        if self.error is not None:
+            raise AssertionError(f"the real-time fleet did not start: {self.error!r}")
+        assert self.copter is not None and self.rover is not None and self.proc is not None
+        return self.copter, self.rover, self.proc
+
+    def close(self) -> None:
+        """Stop the mission (if still running) and both SITL instances."""
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.communicate()
+        if self.launcher is not None:
+            self.launcher.stop_all()
+
+
+def _read_log(path: Path) -> str:
+    try:
+        return path.read_text(errors="replace")
+    except OSError:
+        return ""

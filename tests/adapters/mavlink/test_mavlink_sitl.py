@@ -6,21 +6,23 @@ missions are the shipped files with ``url:`` pointing at SITL; every one must en
 SUCCEEDED with no action failed or halted, and the vehicles landed (copter, LAND,
 disarmed) or held (rover, HOLD, disarmed), as a second ground station sees them.
 Every mission runs at speedup 10; the fleet also at speedup 1 (real time), started
-before the first test and checked by the last, so the others fly while it waits.
+with the folder's first SITL test and checked after its last (conftest.py), so the
+other SITL tests fly while it waits.
 """
 
 from __future__ import annotations
 
 import subprocess
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from plansys_bridge_adapters.mavlink.geo import GeoPoint
 from plansys_bridge_adapters.mavlink.modes import Model
-from plansys_bridge_adapters.mavlink.sitl import DEFAULT_HOME, SitlProcess, missing, sitl_dir
+from plansys_bridge_adapters.mavlink.sitl import SitlProcess
 from sitl_support import (
+    ROVER_HOME,
     GroundStation,
+    RealTimeFleet,
     Sitl,
     assert_succeeded,
     finish_cli,
@@ -32,35 +34,6 @@ from sitl_support import (
 pytestmark = pytest.mark.sitl
 
 SPEEDUP = 10.0
-ROVER_HOME = GeoPoint(DEFAULT_HOME.lat, 149.165600, DEFAULT_HOME.alt)
-"""The fleet's rover starts 34 m east of the copter (the configs' double homes)."""
-Fleet = tuple[SitlProcess, SitlProcess, "subprocess.Popen[str]"]
-
-
-@pytest.fixture(scope="module", autouse=True)
-def fleet_in_real_time(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Fleet]:
-    """The fleet mission with copter and rover at speedup 1, started before this
-    module's first test and checked by its last: in real time the mission mostly
-    waits (42 s until the EKF uses GPS), so the other missions fly meanwhile."""
-    folder = sitl_dir()
-    reason = missing(folder)
-    if reason is not None:
-        pytest.skip(reason)
-    assert folder is not None
-    workdir = tmp_path_factory.mktemp("fleet_x1")
-    launcher = Sitl(folder, workdir)
-    proc: subprocess.Popen[str] | None = None
-    try:
-        copter = launcher.start("copter", speedup=1.0)
-        rover = launcher.start("rover", speedup=1.0, home=ROVER_HOME)
-        urls = {"uav1": copter.url, "ugv1": rover.url}
-        proc = start_cli(sitl_mission("mavlink_fleet.yaml", urls, workdir))
-        yield copter, rover, proc
-    finally:
-        if proc is not None and proc.poll() is None:
-            proc.kill()
-            proc.communicate()
-        launcher.stop_all()
 
 
 def check_fleet(copter: SitlProcess, rover: SitlProcess, proc: subprocess.Popen[str]) -> None:
@@ -144,6 +117,12 @@ def test_nearest_vehicle_wins_each_visit(sitl: Sitl, tmp_path: Path) -> None:
             assert_parked(gcs, "LAND" if homes[vehicle][0] == "copter" else "HOLD")
 
 
-def test_fleet_in_real_time(fleet_in_real_time: Fleet) -> None:
-    # last in this module: the mission started before the first test, at speedup 1
-    check_fleet(*fleet_in_real_time)
+def test_fleet_in_real_time(fleet_in_real_time: RealTimeFleet) -> None:
+    # moved after the folder's last test by conftest.py: the mission started with the
+    # folder's first SITL test, at speedup 1
+    if fleet_in_real_time.skipped is not None:
+        pytest.skip(fleet_in_real_time.skipped)
+    try:
+        check_fleet(*fleet_in_real_time.started())
+    finally:
+        fleet_in_real_time.close()
