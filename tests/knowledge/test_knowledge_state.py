@@ -73,3 +73,16 @@ def test_membership_is_membership_in_the_facts(facts: set[Atom], asked: Atom) ->
     assert (asked in state) == (asked in state.facts) == (asked in facts)
     assert _Lookalike(asked) not in state and (asked.predicate, asked.args) not in state
     assert None not in state and "p" not in state
+
+
+def test_each_snapshot_has_a_cache_of_its_own_made_when_asked() -> None:
+    """Made on first use, then the same dict; a new snapshot (either way of making
+    one) starts without the old one's entries."""
+    start = State([Atom("p", ("a",))])
+    start.cache()["k"] = 1
+    assert start.cache() is start.cache() and start.cache() == {"k": 1}
+    for after in (
+        start.with_facts([], [Atom("p", ("b",))]),
+        start.with_changes(adds=[Atom("p", ("b",))]),
+    ):
+        assert after.cache() == {} and after.cache() is not start.cache()
