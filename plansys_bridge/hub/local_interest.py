@@ -14,6 +14,7 @@ cannot wants everything.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 from plansys_bridge.hub.transport import Subscription
 
@@ -22,42 +23,35 @@ __all__ = ["LocalInterest", "Wants"]
 Wants = Callable[[object], bool]
 
 
-class _Tracked:
-    """A subscription that also leaves the interest table when closed."""
-
-    __slots__ = ("_entry", "_interest", "_sub", "_topic")
-
-    def __init__(
-        self, interest: LocalInterest, topic: str, sub: Subscription, entry: object
-    ) -> None:
-        self._interest = interest
-        self._topic = topic
-        self._sub = sub
-        self._entry = entry
-
-    def close(self) -> None:
-        self._sub.close()
-        self._interest._remove(self._topic, self._entry)
-
-
 class LocalInterest:
-    """Per topic, what the transport's own subscribers want of its messages."""
+    """Per topic, what the transport's own subscribers want of its messages.
+
+    The subscriptions are the transport's own, handed back as they are (so a hub's
+    router can rewire them: :func:`~plansys_bridge.hub.transport.redirect`); one that
+    was closed is noticed the next time its topic is asked about (a subscription has
+    a ``closed`` flag), and leaves the table then.
+    """
 
     def __init__(self) -> None:
-        self._entries: dict[str, list[tuple[object, Wants | None]]] = {}
-        self._filters: dict[str, tuple[Wants, ...] | None] = {}
-        """None: some subscriber wants every message (or there is none to ask)."""
+        self._entries: dict[str, list[tuple[Subscription, Wants | None]]] = {}
+        self._filters: dict[str, tuple[tuple[Wants, ...] | None, tuple[Any, ...]]] = {}
+        """Per topic with subscribers: their filters (None: some subscriber wants every
+        message), and the subscriptions they hold for."""
 
     def track(self, topic: str, sub: Subscription, wants: Wants | None) -> Subscription:
         """Remember ``sub`` (``wants`` None: it wants everything) until it is closed."""
-        entry = object()
-        self._entries.setdefault(topic, []).append((entry, wants))
+        self._entries.setdefault(topic, []).append((sub, wants))
         self._update(topic)
-        return _Tracked(self, topic, sub, entry)
+        return sub
 
     def wanted(self, topic: str, msg: object) -> bool:
         """Does some local subscriber of ``topic`` want ``msg``?"""
-        filters = self._filters.get(topic)
+        entry = self._filters.get(topic)
+        if entry is None:
+            return True
+        filters, subs = entry
+        if len(subs) != 1 or subs[0].closed:  # the usual case, one open router, inlined
+            filters = self._current(topic)
         if filters is None:
             return True
         if len(filters) == 1:  # the hub's router: the usual case
@@ -67,18 +61,33 @@ class LocalInterest:
     def wants(self, topic: str) -> Wants | None:
         """What tells whether a message of ``topic`` is wanted (None: every one is):
         asked once for a batch, then of each message without a call of the table's."""
-        filters = self._filters.get(topic)
+        filters = self._current(topic)
         if filters is None:
             return None
         if len(filters) == 1:
             return filters[0]
         return lambda msg: any(wants(msg) for wants in filters)
 
-    def _remove(self, topic: str, entry: object) -> None:
-        entries = [e for e in self._entries.get(topic, ()) if e[0] is not entry]
-        self._entries[topic] = entries
-        self._update(topic)
+    def _current(self, topic: str) -> tuple[Wants, ...] | None:
+        """The filters of ``topic``'s open subscriptions (None: nobody to ask, or
+        somebody wants everything)."""
+        entry = self._filters.get(topic)
+        if entry is None:
+            return None
+        filters, subs = entry
+        for sub in subs:
+            if sub.closed:
+                self._update(topic)
+                return self._current(topic)
+        return filters
 
     def _update(self, topic: str) -> None:
-        wants = [w for _e, w in self._entries.get(topic, ())]
-        self._filters[topic] = None if not wants or None in wants else tuple(w for w in wants if w)
+        entries = [e for e in self._entries.get(topic, ()) if not getattr(e[0], "closed", False)]
+        if not entries:
+            self._entries.pop(topic, None)
+            self._filters.pop(topic, None)
+            return
+        self._entries[topic] = entries
+        wants = [w for _s, w in entries]
+        filters = None if None in wants else tuple(w for w in wants if w)
+        self._filters[topic] = (filters, tuple(s for s, _w in entries))

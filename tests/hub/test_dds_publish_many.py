@@ -193,3 +193,32 @@ def test_the_batch_filter_says_what_wanted_says_of_each_message() -> None:
     for sub in (everything, first, second):
         sub.close()
         agree()
+
+
+def test_a_dds_subscription_takes_batches_once_redirected() -> None:
+    """A hub's router rewires its DDS subscription as it would an in-process one: a
+    batch published here, and a batch taken from DDS, reach it in one call each."""
+    from plansys_bridge.hub.transport import redirect
+
+    msgs = [_message(HUB, 0, i) for i in range(6)]
+
+    async def body(a: DdsTransport, b: DdsTransport) -> tuple[list[list[object]], int]:
+        calls: list[list[object]] = []
+        sub_a = a.subscribe_wanting(HUB, lambda m: calls.append([m]), _wants)
+        sub_b = b.subscribe_wanting(HUB, lambda m: calls.append([m]), None)
+        for sub in (sub_a, sub_b):
+            assert redirect(sub, lambda m: calls.append([m]), lambda ms: calls.append(list(ms)))
+        a.publish_many(HUB, msgs)
+        await until(lambda: sum(map(len, calls)) >= 3 + len(msgs))
+        await asyncio.sleep(0.05)
+        sub_a.close()
+        a.publish_many(HUB, msgs)  # nobody here any more
+        await until(lambda: sum(map(len, calls)) >= 3 + 2 * len(msgs))
+        await asyncio.sleep(0.05)
+        return calls, sum(map(len, calls))
+
+    calls, total = with_pair(body)
+    wanted = [m for m in msgs if _wants(m)]
+    assert calls[0] == wanted  # at home: the wanted ones, one call
+    assert [m for batch in calls[1:] for m in batch] == msgs + msgs  # remote: all, in order
+    assert total == len(wanted) + 2 * len(msgs)
