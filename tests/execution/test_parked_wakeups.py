@@ -12,23 +12,20 @@ hub messages (with their mission times), DOT and knowledge, whatever happens whe
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import asdict
 
 import pytest
-from execution_helpers import Event, PerformerSpec, knowledge_from, load_domain, run_scenario
+from execution_helpers import Event, PerformerSpec
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
-from test_standard_action import PARALLEL, PERFORMERS, PLAN, _context
+from test_standard_action import PARALLEL, PERFORMERS, PLAN, _context, _knowledge, observe
 
 from plansys_bridge.execution.action_runtime import ActionRuntime
 from plansys_bridge.execution.executor import Executor
 from plansys_bridge.execution.options import ExecutorOptions
 from plansys_bridge.execution.plan_context import PlanContext
 from plansys_bridge.execution.tree_builder import build_tree, default_template
-from plansys_bridge.hub.messages import Topics
 from plansys_bridge.knowledge.problem_expert import ProblemExpert
 from plansys_bridge.planning.orderings import END, START, Point
-from plansys_bridge.planning.plan import parse_plan
 
 CROSS = (
     "0: (patrol r2d2 kitchen) [2]\n"
@@ -47,46 +44,10 @@ EVENTS: dict[str, Callable[[ProblemExpert, Executor], None] | None] = {
 SLOW_C3PO = [*PERFORMERS[:1], PerformerSpec("c3po_node", PERFORMERS[1].actions, {"move": 5.0})]
 
 
-def _knowledge() -> ProblemExpert:
-    return knowledge_from(
-        load_domain("simple_example.pddl"),
-        instances={"r2d2": "robot", "c3po": "robot", "kitchen": "room", "hall": "room"},
-        facts=[
-            "(robot_at r2d2 kitchen)",
-            "(robot_at c3po hall)",
-            "(connected kitchen hall)",
-            "(connected hall kitchen)",
-            "(battery_full r2d2)",
-            "(battery_full c3po)",
-        ],
-    )
-
-
 def _observed(plan: str, event: str, at: float, options: ExecutorOptions) -> tuple[object, ...]:
-    knowledge = _knowledge()
     action = EVENTS[event]
     events: list[Event] = [] if action is None else [(at, action)]
-
-    async def body(executor: Executor):  # type: ignore[no-untyped-def]
-        return await executor.execute(parse_plan(PLANS[plan]), plan_id="p")
-
-    run = run_scenario(
-        load_domain("simple_example.pddl"),
-        knowledge,
-        body,
-        SLOW_C3PO,
-        options=options,
-        events=events,
-        topics=(Topics.ACTIONS_HUB, Topics.ACTION_EXECUTION_INFO, Topics.DOT_GRAPH),
-    )
-    return (
-        run.result.status,
-        run.result.message,
-        run.result.finished,
-        [asdict(a) for a in run.result.actions],
-        [(t, topic, repr(m)) for t, topic, m in run.messages],
-        sorted(map(str, knowledge.state().facts)),
-    )
+    return observe(PLANS[plan], SLOW_C3PO, options, events, _knowledge("(battery_full c3po)"))
 
 
 def _park_on_any_move(self: PlanContext, rt: ActionRuntime, other: int, point: Point) -> None:

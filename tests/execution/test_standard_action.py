@@ -50,7 +50,8 @@ PLAN = (
 PARALLEL = "0: (move r2d2 kitchen hall) [5]\n0: (patrol c3po hall) [20]\n"
 
 
-def _knowledge() -> ProblemExpert:
+def _knowledge(*extra: str) -> ProblemExpert:
+    """The scenarios' world; ``extra``: more facts."""
     return knowledge_from(
         load_domain("simple_example.pddl"),
         instances={
@@ -67,6 +68,7 @@ def _knowledge() -> ProblemExpert:
             "(connected hall kitchen)",
             "(charging_point_at dock)",
             "(battery_full r2d2)",
+            *extra,
         ],
         goal="(and (patrolled kitchen) (patrolled hall))",
     )
@@ -115,7 +117,18 @@ def _observed(name: str, *, subtree: bool) -> tuple[object, ...]:
     text, performers, options, events = SCENARIOS[name]
     if subtree:
         options = replace(options, action_template=default_template)
-    knowledge = _knowledge()
+    return observe(text, performers, options, events, _knowledge())
+
+
+def observe(
+    text: str,
+    performers: Sequence[PerformerSpec],
+    options: ExecutorOptions,
+    events: list[Event],
+    knowledge: ProblemExpert,
+) -> tuple[object, ...]:
+    """Everything observable of executing plan ``text``: the result, its records,
+    every message on the hub with its mission time, the knowledge at the end."""
 
     async def body(executor: Executor):  # type: ignore[no-untyped-def]
         return await executor.execute(parse_plan(text), plan_id="p")
