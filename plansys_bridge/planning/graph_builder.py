@@ -11,8 +11,8 @@ repeats few ground actions many times (a robot going round and round). So what a
 ground action's start, over-all and end read and write is worked out once per
 ground action (when it is the same in every state, see
 :func:`~plansys_bridge.planning.effect_access.reads_fixed`), and each happening
-then records all its accesses in one call whose loops do the common atom cases
-inline. Atoms keep their truth values in their histories: a condition of literals
+then records its accesses in the simulation loop itself (the common atom cases
+written out). Atoms keep their truth values in their histories: a condition of literals
 is checked, and a plain effect applied, on those, and a State is made only when the
 evaluator needs one. What depends on the state takes the general way each time.
 """
@@ -95,7 +95,7 @@ class GraphBuilder:
             self.histories,
             self._state,
         )
-        holds, record = ev.holds, self._record
+        holds, edges, succ = ev.holds, self.edges, self.succ
         open_over_all: dict[int, tuple[VarHistory, ...]] = {}
         watchers: dict[VarHistory, set[int]] = {}
         for p, h in enumerate(order):
@@ -159,16 +159,55 @@ class GraphBuilder:
                     and getattr(m, _ACCESS_PARTS[end]) is not None
                 ):
                     setattr(m, _REC_PARTS[end], rec)
-            if end or not m.check_over:
-                record(h, rec, writes, ())
-            else:  # recorded with the over-all reads (after the start effects)
+            over_check = not end and m.check_over
+            keep: tuple[VarHistory, ...] = ()
+            if over_check:  # read after the start effects, until the step's end
                 over_lits = m.over_lits
                 if m.over is None:
                     over, over_lits = hs.reads(g.over_all, m, "over", now)
                     keep = m.watched if m.over is not None else watched(over)
                 else:
                     keep = m.watched
-                record(h, rec, writes, keep)
+            # the happening's accesses: its reads, its writes, its over-all reads.
+            # An atom read waits for the atom's latest writer; a write goes after
+            # the members of the variable's previous run (a write of the current
+            # run's kind commutes with the run, except an assignment), keeping a
+            # causal or earlier reason for a pair. Written out here: this is
+            # done for every happening, mostly on a few atoms.
+            mine = pos[h]
+            mark: tuple[int, Kind | None] = (h, None)
+            for hist in rec:
+                if hist.is_atom:
+                    src = hist.latest_effect
+                    if src is not None and src >> 1 != i and pos[src] < mine:
+                        link = edges.get((src, h))
+                        if link is None:
+                            edges[(src, h)] = ("causal", hist)
+                            succ[src].append(h)
+                        elif link[0] != "causal":
+                            edges[(src, h)] = ("causal", hist)
+                    hist.current.append(mark)
+                else:
+                    self._read(hist, h, h)
+            if writes:
+                mark = (h, "effects")
+                for hist, kind in writes:
+                    if hist.kind == kind and kind != "assign":
+                        members = hist.previous
+                    else:
+                        members = hist.previous = hist.current
+                        hist.current = []
+                        hist.kind = kind
+                    for src, role in members:
+                        if src >> 1 == i or pos[src] >= mine or (src, h) in edges:
+                            continue
+                        edges[(src, h)] = ("effects" if role == "effects" else "threat", hist)
+                        succ[src].append(h)
+                    hist.current.append(mark)
+                    hist.latest_effect = h
+            if over_check:
+                for hist in keep:
+                    self._read_over(hist, h)
                 ok = m.over_holds  # type: ignore[assignment]
                 if ok is None:
                     if over_lits is None:
@@ -244,71 +283,17 @@ class GraphBuilder:
 
     # ------------------------------------------------------------ accesses
 
-    def _record(
-        self,
-        h: int,
-        reads: Sequence[VarHistory],
-        writes: Sequence[tuple[VarHistory, str]],
-        over: Sequence[VarHistory],
-    ) -> None:
-        """Happening ``h``'s accesses, in one call: it reads ``reads``, then writes
-        ``writes``, then (a start) reads its over-all requirement's ``over`` until
-        its step's end. Only reads of variables some action may change are given
-        (see :func:`~plansys_bridge.planning.ground_moves.recorded`).
-
-        An atom read waits for the atom's latest writer (written out here: a
-        happening makes a few such reads); a fluent read takes :meth:`_read`. A
-        write goes after the members of the variable's previous run (a write of the
-        current run's kind commutes with the run, except an assignment), keeping a
-        causal or earlier reason for a pair."""
-        pos, edges, succ = self.pos, self.edges, self.succ
-        mine, step = pos[h], h >> 1
-        for hist in reads:
-            if hist.is_atom:
-                src = hist.latest_effect
-                if src is not None and src >> 1 != step and pos[src] < mine:
-                    found = edges.get((src, h))
-                    if found is None:
-                        edges[(src, h)] = ("causal", hist)
-                        succ[src].append(h)
-                    elif found[0] != "causal":
-                        edges[(src, h)] = ("causal", hist)
-                hist.current.append((h, None))
-            else:
-                self._read(hist, h, h)
-        for hist, kind in writes:
-            if hist.kind == kind and kind != "assign":
-                members = hist.previous
-            else:
-                members = hist.previous = hist.current
-                hist.current = []
-                hist.kind = kind
-            for src, role in members:
-                if src >> 1 == step or pos[src] >= mine or (src, h) in edges:
-                    continue
-                edges[(src, h)] = ("effects" if role == "effects" else "threat", hist)
-                succ[src].append(h)
-            hist.current.append((h, "effects"))
-            hist.latest_effect = h
-        tail = h + 1
-        for hist in over:
-            if hist.is_atom:
-                src = hist.latest_effect
-                if src is not None and src >> 1 != step and pos[src] < mine:
-                    self._causal(src, h, hist)
-                hist.current.append((tail, None))
-            else:
-                self._read(hist, h, tail)
-
-    def _causal(self, src: int, h: int, hist: VarHistory) -> None:
-        """A causal link ``src -> h`` on ``hist`` (one replaces another kind)."""
-        key = (src, h)
-        found = self.edges.get(key)
-        if found is None:
-            self.edges[key] = ("causal", hist)
-            self.succ[src].append(h)
-        elif found[0] != "causal":
-            self.edges[key] = ("causal", hist)
+    def _read_over(self, hist: VarHistory, h: int) -> None:
+        """Start ``h``'s read of ``hist`` for its over-all requirement (until the
+        step's end ``h + 1``): an atom waits for its latest writer, a fluent for the
+        last run of changes (:meth:`_read`)."""
+        if not hist.is_atom:
+            self._read(hist, h, h + 1)
+            return
+        src = hist.latest_effect
+        if src is not None and src >> 1 != h >> 1 and self.pos[src] < self.pos[h]:
+            self._edge(src, h, "causal", hist)
+        hist.current.append((h + 1, None))
 
     def _read(self, hist: VarHistory, head: int, tail: int) -> None:
         """A fluent read: after every member of the last run of changes."""
