@@ -35,7 +35,10 @@ PROJECT_MARKER = b"plansys_bridge"
 """USER_DATA of this project's plain-topic writers (their messages also go wrapped)."""
 
 ANY_SAMPLE = SampleState.Any | ViewState.Any | InstanceState.Any
-_TAKE_BATCH = 64
+_TAKE_BATCH = 256
+"""Samples taken per call: an auction's burst (a RESPONSE or a REJECT per bidder) in
+one or two; a take that returns fewer found the reader empty, and samples arriving
+after it fire the read condition again, so no further take is needed to see that."""
 
 
 @dataclass
@@ -106,6 +109,8 @@ class Intake:
                     self._writer_name(ep, info.publication_handle),
                     reason,
                 )
+            if len(samples) < _TAKE_BATCH:
+                return
 
     def _writer_name(self, ep: Endpoint, handle: int) -> str:
         """The writer as DDS knows it: its GUID and its participant's."""
