@@ -51,6 +51,7 @@ __all__ = [
     "expr_fluents",
     "fixed_condition_vars",
     "fixed_effect_access",
+    "fixed_reads",
     "ground_fluent",
     "literal_atoms",
     "numeric_class",
@@ -212,11 +213,26 @@ def fixed_condition_vars(cond: Condition) -> set[Var] | None:
     Why: a plan has a few conditions per ground action, and the evaluator's walk
     sets up an evaluation context for each; these need none.
     """
+    found = fixed_reads(cond)
+    return None if found is None else found[0]
+
+
+Literals: TypeAlias = tuple[tuple[Atom, ...], tuple[Atom, ...]]
+"""The atoms that must be true and those that must be false (see :func:`literal_atoms`)."""
+
+
+def fixed_reads(cond: Condition) -> tuple[set[Var], Literals | None] | None:
+    """:func:`fixed_condition_vars` and :func:`literal_atoms` of a condition
+    :func:`reads_fixed` accepts, in one walk (the plan graph builder asks for both
+    once per ground action's condition); None when an argument is a variable."""
     if type(cond) is And and not cond.operands:
-        return set()
+        return set(), ((), ())
     pos: set[Atom] = set()
     neg: set[Atom] = set()
     fluents: set[FluentKey] = set()
+    true: list[Atom] = []
+    false: list[Atom] = []
+    literal = True
     stack: list[tuple[Condition, bool]] = [(cond, True)]
     while stack:
         node, positive = stack.pop()
@@ -226,22 +242,33 @@ def fixed_condition_vars(cond: Condition) -> set[Var] | None:
             if type(args) is not tuple or _variable_in(args):
                 return None
             # the atom itself: equal, with the same hash, to the evaluator's new one
-            (pos if positive else neg).add(node)  # type: ignore[arg-type]
+            if positive:
+                pos.add(node)  # type: ignore[arg-type]
+                true.append(node)  # type: ignore[arg-type]
+            else:
+                neg.add(node)  # type: ignore[arg-type]
+                false.append(node)  # type: ignore[arg-type]
         elif kind is And:
             stack += [(c, positive) for c in reversed(node.operands)]  # type: ignore[union-attr]
         elif kind is Not:
-            stack.append((node.operand, not positive))  # type: ignore[union-attr]
+            operand = node.operand  # type: ignore[union-attr]
+            if not positive or type(operand) is not Atom:
+                literal = False  # literals negate an atom, once
+            stack.append((operand, not positive))
         elif kind is Compare:
+            literal = False
             for n in iter_nodes(node):
                 if type(n) is FluentRef:
                     if type(n.args) is not tuple or _variable_in(n.args):
                         return None
                     fluents.add((n.name, n.args))
-        elif kind is not Equals:
+        elif kind is Equals:
+            literal = False
+        else:
             return None
     out: set[Var] = {("a", atom) for atom in pos | neg}
     out |= {("f", key) for key in fluents}
-    return out
+    return out, (tuple(true), tuple(false)) if literal else None
 
 
 def _variable_in(args: tuple[str, ...]) -> bool:

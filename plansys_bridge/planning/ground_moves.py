@@ -24,9 +24,8 @@ from plansys_bridge.planning.effect_access import (
     Var,
     condition_vars,
     effect_access,
-    fixed_condition_vars,
     fixed_effect_access,
-    literal_atoms,
+    fixed_reads,
     reads_fixed,
     writes_fixed,
     written_names,
@@ -60,6 +59,7 @@ class Moves:
         "over",
         "over_holds",
         "over_lits",
+        "schema",
         "start",
         "start_access",
         "start_lits",
@@ -68,6 +68,8 @@ class Moves:
     )
 
     def __init__(self, g: GroundAction) -> None:
+        self.schema = id(g.action) if g.action is not None else id(g)
+        """The action the ground action was made of (by identity; its own when unknown)."""
         # an empty conjunction holds everywhere and reads nothing: not asked at all
         self.check_start = type(g.at_start) is not And or bool(g.at_start.operands)
         self.check_over = type(g.over_all) is not And or bool(g.over_all.operands)
@@ -128,6 +130,11 @@ class Histories:
         """The histories, by atom (predicate, arguments) and by fluent."""
         self.changeable: set[tuple[str, str]] | None = set()
         self._derived = ev._derived_rules
+        self._fixed: dict[tuple[int, str], bool] = {}
+        """Per action (by identity) and part, whether what the part reads and
+        writes is the same in every state: a matter of the part's structure alone,
+        which grounding keeps (it only substitutes arguments), so it is asked once
+        per action and not once per ground action."""
 
     def ground(
         self, steps: Sequence[PlanStep], domain: Domain
@@ -180,15 +187,19 @@ class Histories:
         its state), and its literals' histories (None: not only literals), kept in
         ``m`` (with the over-all ones worth watching) when they are the same in
         every state."""
-        fixed = reads_fixed(cond, self._derived)
-        listed = fixed_condition_vars(cond) if fixed else None
-        if listed is None:
-            listed = condition_vars(self.ev, cond, GROUND, state())
+        key = (m.schema, part)
+        fixed = self._fixed.get(key)
+        if fixed is None:
+            fixed = self._fixed[key] = reads_fixed(cond, self._derived)
+        walked = fixed_reads(cond) if fixed else None
+        if walked is None:
+            listed, atoms = condition_vars(self.ev, cond, GROUND, state()), None
+        else:
+            listed, atoms = walked
         found = tuple(map(self.history, listed))
         lits: Lits = None
         if fixed:
             setattr(m, part, found)
-            atoms = literal_atoms(cond)
             if atoms is not None:  # every atom read has its history by now
                 kept = self.atoms
                 lits = (
@@ -203,7 +214,10 @@ class Histories:
     def access(self, effect: Effect, m: Moves, part: str, state: Callable[[], State]) -> Access:
         """What ``effect`` reads and writes where the simulation is, kept in ``m``
         when it is the same in every state."""
-        fixed = writes_fixed(effect)
+        key = (m.schema, part)
+        fixed = self._fixed.get(key)
+        if fixed is None:
+            fixed = self._fixed[key] = writes_fixed(effect)
         access = fixed_effect_access(effect) if fixed else None
         if access is None:
             access = effect_access(self.ev, effect, state(), fixed)
