@@ -41,6 +41,7 @@ from plansys_bridge.hub.auction_policy import (
 )
 from plansys_bridge.hub.auction_supervision import Supervision
 from plansys_bridge.hub.driven_future import DrivenFuture
+from plansys_bridge.hub.freed_watch import FreedWatch, Waiter, watch_of
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.liveness import LivenessTable, could_serve
 from plansys_bridge.hub.messages import (
@@ -69,6 +70,9 @@ _RESPONSE = ExecutionType.RESPONSE
 """Read once: an enum member read off its class costs about 0.3 us on Python 3.11,
 and the bidding compares every RESPONSE of an auction with it."""
 _FEEDBACK = ExecutionType.FEEDBACK
+_FINISH = ExecutionType.FINISH
+_CONFIRM = ExecutionType.CONFIRM
+_HUB = Topics.ACTIONS_HUB
 _REQUEST = ExecutionType.REQUEST
 _REJECT = ExecutionType.REJECT
 _AUCTION = ClientPhase.AUCTION
@@ -105,6 +109,10 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
     _sub: Subscription | None = None
     _timer: asyncio.TimerHandle | None = None
     _timer_at = math.inf
+    _watch: FreedWatch
+    """The hub's clients waiting for a performer (:mod:`.freed_watch`)."""
+    _waiting: dict[Waiter, None] | None = None
+    """Where this client waits in ``_watch`` while in auction."""
     # the action's auctions (one, more after a lost performer)
     _excluded: frozenset[str] = frozenset()
     _lost: tuple[str, ...] = ()
@@ -132,7 +140,6 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
         self.request_id = request_id if request_id is not None else f"{action}#{next(_request_ids)}"
         self.policy = policy if policy is not None else AuctionPolicy()
         self._pending_bidders: list[str] = []
-        self._unwatch: Callable[[], None] = _nothing
         self._publish = hub.publish
 
     @property
@@ -181,12 +188,6 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
             raise exc
         return done
 
-    def _launch(self) -> None:
-        self._liveness = self.hub.liveness
-        keys = client_keys(self.request_id, self.action, self.arguments)
-        self._sub = self.hub.subscribe(Topics.ACTIONS_HUB, self._on_action_msg, keys=keys)
-        self._begin_auction()
-
     def _abandon(self) -> None:
         """Never leave a performer working, or one committed to us, behind."""
         self._reject_pending()
@@ -208,7 +209,18 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
     # ------------------------------------------------------------------ auction
 
     def _begin_auction(self) -> None:
+        """Start an auction: the first (from ``start()``, as ``_launch``, after
+        subscribing) or another after losing the performer."""
         loop = self._loop
+        if self._sub is None:  # the first: listen, and find what the hub shares
+            hub = self.hub
+            liveness = self._liveness = hub.liveness
+            watch = FreedWatch.last
+            if watch is None or watch.liveness() is not liveness:
+                watch = watch_of(liveness)
+            self._watch = watch
+            keys = client_keys(self.request_id, self.action, self.arguments)
+            self._sub = hub.subscribe(_HUB, self._on_action_msg, keys=keys)
         self.phase = _AUCTION
         self.performer = ""
         self.completion = 0.0
@@ -221,14 +233,26 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
         self._bids = []
         self._seen = set()
         self._bid_deadline = math.inf
-        if self._liveness is not None:
-            self._unwatch = self._liveness.watch(self.action, self._on_freed)
+        # wait for a freed performer of the action (FreedWatch.first, inlined but once
+        # per action and hub)
+        waiting = self._watch.waiting.get(self.action)
+        if waiting is None:
+            self._waiting = self._watch.first(self.action, self)
+        else:
+            waiting[self] = None
+            self._waiting = waiting
         self._auction_step()
 
+    _launch = _begin_auction
+
     def _auction_over(self) -> None:
-        if self._unwatch is not _nothing:
-            self._unwatch()
-            self._unwatch = _nothing
+        """Stop waiting for a freed performer."""
+        waiting = self._waiting
+        if waiting is not None:
+            self._waiting = None
+            del waiting[self]
+            if not waiting:
+                self._watch.idle(self.action)
 
     def _auction_step(self) -> None:
         """Move the auction on: confirm, give up, or (re-)send the REQUEST, then wait
@@ -256,33 +280,41 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
                     # at once, using up the next periodic REQUEST's slot, so the count
                     # stays one per retry period and none goes out after giving up.
                     self._freed = False
-                    self._send(_REQUEST, "")
                     sent += 1
                 elif now >= start + sent * period:
-                    self._send(_REQUEST, "")
                     sent += 1
                     # Catch up without a burst if the loop was held up for a while.
                     while start + sent * period <= now:
                         sent += 1
-                self._sent = sent
+                if sent != self._sent:  # a REQUEST (_send, inlined)
+                    self._sent = sent
+                    self.requests_sent += 1
+                    self._publish(
+                        _HUB,
+                        action_execution(
+                            _REQUEST, "", self.action, self.arguments, request_id=self.request_id
+                        ),
+                    )
                 deadline = min(start + sent * period, self._give_up_at)
             if deadline > now:
                 self._arm(deadline)
                 return
 
     def _confirm(self) -> None:
-        # _reject_pending, _auction_over and _arm's early return inlined: once per action
+        # _send and the early returns of _reject_pending and _arm inlined: once per action
         winner = min(self._bids)[2]
         self._pending_bidders.remove(winner)
-        self._send(ExecutionType.CONFIRM, winner)
+        self._publish(
+            _HUB,
+            action_execution(
+                _CONFIRM, winner, self.action, self.arguments, request_id=self.request_id
+            ),
+        )
         self.performer = winner
         self.phase = _EXECUTING
         if self._pending_bidders:
             self._reject_pending()
-        unwatch = self._unwatch
-        if unwatch is not _nothing:
-            self._unwatch = _nothing
-            unwatch()
+        self._auction_over()
         if self._confirm_cb is not None:
             try:
                 self._confirm_cb(winner)
@@ -325,7 +357,11 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
             self._lost,
         )
         self._end()
-        self._resolve(outcome)
+        # _resolve, inlined: once per action
+        done = self._done
+        if done is not None and not done.done():
+            done.remove_done_callback(self._on_done)
+            done.set_result(outcome)
 
     def _fail(self, exc: Exception) -> None:
         """A callback raised: ``run()`` raises it, as when it was called there."""
@@ -334,7 +370,7 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
 
     def _end(self) -> None:
         self.phase = ClientPhase.DONE
-        if self._unwatch is not _nothing:
+        if self._waiting is not None:
             self._auction_over()
         if self._timer is not None:
             self._timer.cancel()
@@ -366,7 +402,7 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
         if kind is _REQUEST:
             self.requests_sent += 1
         self._publish(
-            Topics.ACTIONS_HUB,
+            _HUB,
             action_execution(
                 kind, node_id, self.action, self.arguments, request_id=self.request_id
             ),
@@ -384,7 +420,7 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
         reject = action_execution(
             _REJECT, "", self.action, self.arguments, request_id=self.request_id
         )
-        self.hub.publish_many(Topics.ACTIONS_HUB, [readdressed(reject, node) for node in pending])
+        self.hub.publish_many(_HUB, [readdressed(reject, node) for node in pending])
 
     def _on_action_msg(self, msg: object) -> None:
         if (
@@ -402,7 +438,13 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
             return
         phase = self.phase
         if phase is _EXECUTING:
-            self._on_supervised(msg)
+            if msg.type is _FINISH and msg.node_id == self.performer:
+                # _on_supervised's end, inlined: once per action
+                success = msg.success
+                self.completion = 1.0 if success else max(self.completion, float(msg.completion))
+                self._finish(success, msg.status or ("succeeded" if success else "failed"))
+            else:
+                self._on_supervised(msg)
             return
         if phase is not _AUCTION:
             return
@@ -419,10 +461,15 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
                 bids = self._bids
                 count = len(bids)
                 bids.append((cost, count, node))
-                now = self._loop.time()
                 if not count:
-                    self._bid_deadline = now + self.policy.bid_window
-                elif now < self._bid_deadline and self._timer_at <= self._bid_deadline:
+                    policy = self.policy
+                    if policy.selection == "first":
+                        self._confirm()  # what _auction_step does with a first bid
+                        return
+                    self._bid_deadline = self._loop.time() + policy.bid_window
+                elif (
+                    self._loop.time() < self._bid_deadline and self._timer_at <= self._bid_deadline
+                ):
                     return  # still collecting bids, the timer set: nothing else to do
         self._auction_step()
 
@@ -431,7 +478,3 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
         if self.phase is _AUCTION and could_serve(msg, self.action, self.arguments):
             self._freed = True
             self._auction_step()
-
-
-def _nothing() -> None:
-    return None

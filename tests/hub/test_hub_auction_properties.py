@@ -138,13 +138,17 @@ def _simulate(
     return log, outcomes, perfs
 
 
+SCENARIOS = {
+    "performers": st.lists(performer_st, min_size=0, max_size=4),
+    "actions": st.lists(action_st, min_size=1, max_size=5),
+    "policy": policy_st,
+    "seed": st.integers(0, 1000),
+}
+"""What :func:`_simulate` takes, as ``@given`` keyword arguments."""
+
+
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(
-    performers=st.lists(performer_st, min_size=0, max_size=4),
-    actions=st.lists(action_st, min_size=1, max_size=5),
-    policy=policy_st,
-    seed=st.integers(0, 1000),
-)
+@given(**SCENARIOS)
 def test_protocol_invariants(
     performers: list[dict[str, Any]],
     actions: list[tuple[str, float, float | None]],
