@@ -180,10 +180,16 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
         starts actions within a tick that may still halt them (``halt_on_failure``):
         a halted action then sends nothing, and the hub sees the messages in the
         order a task gave, for one loop callback instead of three."""
-        done = self._open("start()")
+        # the outcome future, watched for a cancel from outside (inlined: once per action)
+        if self._done is not None:
+            raise HubError(f"{self!r}: start() may be called only once")
+        loop = self._loop = asyncio.get_running_loop()
+        done: asyncio.Future[ActionOutcome] = loop.create_future()
+        self._done = done
+        done.add_done_callback(self._on_done)
         self._confirm_cb, self._feedback_cb = confirm_cb, feedback_cb
         if soon:
-            self._loop.call_soon(self._begin_soon, done)
+            loop.call_soon(self._begin_soon, done)
         elif (exc := self._begin(done)) is not None:
             raise exc
         return done

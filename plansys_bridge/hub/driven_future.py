@@ -18,8 +18,6 @@ from __future__ import annotations
 import asyncio
 from typing import Generic, TypeVar
 
-from plansys_bridge.errors import HubError
-
 __all__ = ["DrivenFuture"]
 
 T = TypeVar("T")
@@ -27,7 +25,8 @@ T = TypeVar("T")
 
 class DrivenFuture(Generic[T]):
     """Base class: ``_launch`` (the first step) and ``_abandon`` (stop, after a cancel
-    from outside or a failed first step) are the subclass's."""
+    from outside or a failed first step) are the subclass's, and so is making the
+    outcome future ``_done`` (``loop.create_future()``, watched by :meth:`_on_done`)."""
 
     _done: asyncio.Future[T] | None = None
     _loop: asyncio.AbstractEventLoop
@@ -38,17 +37,6 @@ class DrivenFuture(Generic[T]):
 
     def _abandon(self) -> None:  # pragma: no cover - every subclass implements it
         raise NotImplementedError
-
-    def _open(self, name: str) -> asyncio.Future[T]:
-        """The outcome future, watched for a cancel from outside; ``name`` is the
-        method that asks, for the error when asked twice."""
-        if self._done is not None:
-            raise HubError(f"{self!r}: {name} may be called only once")
-        loop = self._loop = asyncio.get_running_loop()
-        done: asyncio.Future[T] = loop.create_future()
-        self._done = done
-        done.add_done_callback(self._on_done)
-        return done
 
     def _begin(self, done: asyncio.Future[T]) -> Exception | None:
         """Run the first step, unless the future was cancelled first (as a task
