@@ -21,7 +21,7 @@ ENTRY: dict[str, Any] = {
     "action_ns": NS,
     "locations": {
         "kitchen": {"x": 0.0, "y": 0.0, "yaw": 0.0},
-        "livingroom": {"x": 2.0, "y": 1.0, "yaw": 1.57},  # 2.2 m: about 2 s at 1 m/s
+        "livingroom": {"x": 2.0, "y": 1.0, "yaw": 1.57},  # 2.2 m: about 1 s at 2 m/s
         "bathroom": {"x": -60.0, "y": 0.0},  # the double aborts: "no path to goal"
     },
 }
@@ -47,7 +47,7 @@ class TestMoveBaseContract(PerformerContract):
     @pytest.fixture(autouse=True)
     def _move_base(self, roscore: Roscore, start_peer: Any) -> Iterator[None]:
         self.entry = {**ENTRY, "master_uri": roscore.uri}  # type: ignore[misc]
-        start_peer("move_base_double.py", NS, "1")
+        start_peer("move_base_double.py", NS, "2")
         yield
 
     def make_clock(self) -> Clock:
