@@ -79,9 +79,11 @@ def test_a_returning_server_is_told_to_cancel_the_lost_goal(
             client, handle = await lose_goal(node, "/mb_c", server)
             assert list(client.abandoned) == [handle.goal_id]
             # the server comes back still driving that goal: it must be cancelled
+            # not waiting for "ready": the cancel may come before it is printed
             back = await asyncio.to_thread(
-                start_peer, "move_base_double.py", "/mb_c", "0.5", handle.goal_id
+                start_peer, "move_base_double.py", "/mb_c", "0.5", handle.goal_id, ready=False
             )
+            await asyncio.to_thread(back.expect, "holding ")
             assert back.seen[0] == f"holding {handle.goal_id}"
             cancel = await asyncio.to_thread(back.expect, "cancel ")
             assert cancel == f"cancel {handle.goal_id}"
@@ -104,7 +106,10 @@ def test_a_restarted_server_without_the_goal_lets_it_be_forgotten(
         server = await asyncio.to_thread(start_peer, "move_base_double.py", "/mb_d", "0.5")
         async with Node("action_fresh", master_uri=roscore.uri) as node:
             client, handle = await lose_goal(node, "/mb_d", server)
-            fresh = await asyncio.to_thread(start_peer, "move_base_double.py", "/mb_d", "0.5")
+            # not waiting for "ready": the cancel may come before it is printed
+            fresh = await asyncio.to_thread(
+                start_peer, "move_base_double.py", "/mb_d", "0.5", ready=False
+            )
             cancel = await asyncio.to_thread(fresh.expect, "cancel ")
             assert cancel == f"cancel {handle.goal_id}"
             async with asyncio.timeout(20):
