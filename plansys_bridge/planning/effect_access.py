@@ -56,6 +56,7 @@ __all__ = [
     "literal_atoms",
     "numeric_class",
     "reads_fixed",
+    "var_key",
     "walk_effect",
     "writes_fixed",
     "written_names",
@@ -65,6 +66,25 @@ Parts = Iterator[tuple[Effect, Mapping[str, str]]]
 
 Var: TypeAlias = tuple[str, object]
 """("a", Atom) for a ground atom, ("f", FluentKey) for a numeric fluent."""
+
+
+def var_key(var: Var) -> tuple[str, str, tuple[str, ...]]:
+    """A sort key for variables: kind, predicate or function name, arguments.
+
+    Why: the sets of variables an effect or condition reads and writes iterate in
+    the order of their hashes, which follow the string hash seed; the plan graph
+    visits them in this order instead, so the fact an ordering's reason names (when
+    several order the same pair) is the same in every process."""
+    kind, what = var
+    if kind == "a":
+        atom: Atom = what  # type: ignore[assignment]
+        return kind, atom.predicate, atom.args
+    name, args = what  # type: ignore[misc]
+    return kind, name, args
+
+
+def _atom_key(atom: Atom) -> tuple[str, tuple[str, ...]]:
+    return atom.predicate, atom.args  # type: ignore[return-value]
 
 
 def numeric_class(op: str) -> str:
@@ -348,8 +368,10 @@ class EffectAccess:
 
     adds: AbstractSet[Atom]
     read: tuple[Var, ...]
+    """In :func:`var_key` order."""
     writes: tuple[tuple[Var, str], ...]
-    """(variable, kind of write: ``del``, ``add`` or a numeric class) in order."""
+    """(variable, kind of write: ``del``, ``add`` or a numeric class): the deletes,
+    the adds, the fluents, each in :func:`var_key` order."""
     written: AbstractSet[Var]
     deleted: AbstractSet[Atom] = frozenset()
     """The atoms deleted and not added again."""
@@ -402,10 +424,14 @@ def _access(
                 cls = numeric_class(sub.op)
                 ops[key] = cls if ops.get(key, cls) == cls else "assign"
             read |= {("f", k) for k in expr_fluents(sub.value, binds)}
-    writes: list[tuple[Var, str]] = [(("a", atom), "del") for atom in deletes - adds]
-    writes += [(("a", atom), "add") for atom in adds]
-    writes += [(("f", key), ops.get(key, "assign")) for key in numeric]
+    # in a fixed order (see var_key): deletes, adds, fluents, each sorted
     deleted = deletes - adds
+    writes: list[tuple[Var, str]] = [
+        (("a", atom), "del") for atom in sorted(deleted, key=_atom_key)
+    ]
+    writes += [(("a", atom), "add") for atom in sorted(adds, key=_atom_key)]
+    writes += [(("f", key), ops.get(key, "assign")) for key in sorted(numeric)]
     written = {v for v, _ in writes}
     plain = fixed and not numeric
-    return EffectAccess(adds, tuple(read), tuple(writes), written, deleted, plain)
+    reads = tuple(sorted(read, key=var_key))
+    return EffectAccess(adds, reads, tuple(writes), written, deleted, plain)

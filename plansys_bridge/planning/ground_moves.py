@@ -27,6 +27,7 @@ from plansys_bridge.planning.effect_access import (
     fixed_effect_access,
     fixed_reads,
     reads_fixed,
+    var_key,
     writes_fixed,
     written_names,
 )
@@ -196,7 +197,7 @@ class Histories:
             listed, atoms = condition_vars(self.ev, cond, GROUND, state()), None
         else:
             listed, atoms = walked
-        found = tuple(map(self.history, listed))
+        found = tuple(map(self.history, sorted(listed, key=var_key)))
         lits: Lits = None
         if fixed:
             setattr(m, part, found)
@@ -229,9 +230,10 @@ class Histories:
             access,
             tuple(map(history, access.read)),
             tuple([(of[var], kind) for var, kind in access.writes]),
-            tuple([of[var] for var in access.written]),
-            tuple([of["a", atom] for atom in access.adds]),
-            tuple([of["a", atom] for atom in access.deleted]),
+            # in the writes' order (see var_key), not the sets'
+            tuple([of[var] for var, _ in access.writes]),
+            tuple([of[var] for var, kind in access.writes if kind == "add" and var[0] == "a"]),
+            tuple([of[var] for var, kind in access.writes if kind == "del"]),
         )
         if fixed:
             setattr(m, part, found)
