@@ -79,12 +79,12 @@ def var_key(var: Var) -> tuple[str, str, tuple[str, ...]]:
     if kind == "a":
         atom: Atom = what  # type: ignore[assignment]
         return kind, atom.predicate, atom.args
-    name, args = what  # type: ignore[misc]
-    return kind, name, args
+    key: FluentKey = what  # type: ignore[assignment]
+    return kind, key[0], key[1]
 
 
 def _atom_key(atom: Atom) -> tuple[str, tuple[str, ...]]:
-    return atom.predicate, atom.args  # type: ignore[return-value]
+    return atom.predicate, atom.args
 
 
 def numeric_class(op: str) -> str:
