@@ -61,7 +61,8 @@ def _drive(
 ) -> Body:
     """A body that runs one client through ``via`` ("task": run() in a task, "soon":
     start(soon=True), "start": start()), stopping it at ``cancel_at`` by ``how``
-    ("future": cancelling the task or future, "client": ``client.cancel()``)."""
+    ("future": cancelling the task or future, "client": ``client.cancel()``).
+    The last item returned is what the future's cancel() said (None when not used)."""
 
     async def body(hub: Hub) -> Any:
         rec = HubRecorder(hub)
@@ -79,6 +80,7 @@ def _drive(
 
         client = ActionClient(hub, "move", ["r1"], request_id="x", policy=policy)
         waiter: asyncio.Future[Any]
+        took: bool | None = None
         if via == "task":
             waiter = asyncio.ensure_future(client.run(on_feedback, confirm_cb=on_confirm))
         elif via == "soon":
@@ -88,7 +90,7 @@ def _drive(
         if cancel_at is not None:
             await asyncio.sleep(cancel_at)
             if how == "future":
-                waiter.cancel()
+                took = waiter.cancel()
             else:
                 client.cancel()
         try:
@@ -99,9 +101,20 @@ def _drive(
             ended = repr(exc)
         await asyncio.sleep(40.0)  # long after: nothing more may come
         rec.close()
-        return ended, rec.timeline(request_ids=True), seen, client.phase, client.performer
+        timeline = rec.timeline(request_ids=True)
+        return ended, timeline, seen, client.phase, client.performer, took
 
     return body
+
+
+def _assert_agree(general: Any, fast: Any) -> None:
+    """Full equality, except for the tie described in the module docstring: there the
+    task's cancel() took and the done future's did not, and only the ending differs."""
+    if general[5] is True and fast[5] is False:
+        assert fast[1:5] == general[1:5]
+        assert general[0] == "cancelled" and fast[0] != "cancelled"
+    else:
+        assert fast == general
 
 
 PERFORMERS = [("p1", 3.0, 1.0), ("p2", 2.0, None)]
@@ -112,7 +125,7 @@ def test_start_soon_and_run_in_a_task_agree_on_a_plain_run() -> None:
     general = _scenario(_drive("task", policy, None, ""), PERFORMERS)
     fast = _scenario(_drive("soon", policy, None, ""), PERFORMERS)
     assert fast == general
-    outcome, timeline, seen, phase, _ = fast
+    outcome, timeline, seen, phase, _, _ = fast
     assert outcome.success and phase is ClientPhase.DONE
     kinds = [kind for _, kind, _, _ in timeline]
     assert kinds[:3] == ["REQUEST", "RESPONSE", "RESPONSE"] and kinds[-1] == "FINISH"
@@ -125,8 +138,8 @@ def test_cancelling_the_future_cancels_the_performer_as_cancelling_the_task_did(
     general = _scenario(_drive("task", policy, 1.5, "future"), PERFORMERS)
     fast = _scenario(_drive("soon", policy, 1.5, "future"), PERFORMERS)
     assert fast == general
-    ended, timeline, _, phase, performer = fast
-    assert ended == "cancelled" and phase is ClientPhase.DONE
+    ended, timeline, _, phase, performer, took = fast
+    assert ended == "cancelled" and phase is ClientPhase.DONE and took is True
     assert timeline[-1] == (1.5, "CANCEL", performer, "x")
     assert not any(kind == "FINISH" for _, kind, _, _ in timeline)
 
@@ -136,7 +149,7 @@ def test_cancelling_the_future_in_a_best_bid_auction_rejects_every_bidder() -> N
     general = _scenario(_drive("task", policy, 0.5, "future"), PERFORMERS)
     fast = _scenario(_drive("start", policy, 0.5, "future"), PERFORMERS)
     assert fast == general
-    _, timeline, _, _, performer = fast
+    _, timeline, _, _, performer, _ = fast
     assert performer == ""
     assert sorted(node for _, kind, node, _ in timeline if kind == "REJECT") == ["p1", "p2"]
 
@@ -147,7 +160,7 @@ def test_a_failing_callback_fails_the_future_and_cancels_the_performer(fail_on: 
     general = _scenario(_drive("task", policy, None, "", fail_on), PERFORMERS)
     fast = _scenario(_drive("soon", policy, None, "", fail_on), PERFORMERS)
     assert fast == general
-    ended, timeline, _, _, performer = fast
+    ended, timeline, _, _, performer, _ = fast
     assert ended == f"RuntimeError('{fail_on} refused')"
     assert ("CANCEL", performer) in [(kind, node) for _, kind, node, _ in timeline]
 
@@ -188,7 +201,7 @@ def test_start_soon_agrees_with_run_in_a_task(
     )
     general = _scenario(_drive("task", policy, cancel_at, how, fail_on), performers)
     fast = _scenario(_drive("soon", policy, cancel_at, how, fail_on), performers)
-    assert fast == general
+    _assert_agree(general, fast)
 
 
 def test_start_soon_sends_nothing_before_the_loop_runs_its_callback() -> None:
