@@ -24,6 +24,7 @@ import asyncio.runners
 import gc
 import logging
 import os
+import signal
 import threading
 import time
 from collections.abc import Iterator
@@ -37,6 +38,13 @@ from plansys_bridge.hub.messages import ActionExecution, Topics
 from plansys_bridge.hub.transport import InProcessTransport
 
 pytest_plugins = ["pytester"]
+
+# The suite interrupts the processes it starts (safe stops on SIGINT) and itself
+# (tests/cli/test_interrupts.py). A job started in the background by a
+# non-interactive shell inherits SIGINT ignored, and so would every process the
+# tests start; Python's own handler back in place gives them the default again.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def _thread_grace() -> float:
