@@ -52,6 +52,7 @@ from plansys_bridge.execution.dot import IncrementalDot
 from plansys_bridge.execution.options import ExecutorOptions
 from plansys_bridge.execution.results import ExecutionResult
 from plansys_bridge.execution.tree_builder import build_tree
+from plansys_bridge.hub.auction import ClientPhase
 from plansys_bridge.hub.hub import Hub
 from plansys_bridge.hub.messages import ActionExecutionInfo, DotGraph, ExecutingPlan, Topics
 from plansys_bridge.knowledge.evaluation import Evaluator
@@ -327,9 +328,11 @@ class Executor:
             if dot is not None and ctx.changed:
                 self._publish_dot(ctx, dot)
         # every auction client ends before the plan does (a cancel completes quickly)
+        done = ClientPhase.DONE
         for rt in ctx.actions:
-            if rt.client is not None:
-                rt.client.cancel()
+            client = rt.client
+            if client is not None and client.phase is not done:  # cancel() would return
+                client.cancel()
         if ctx.tasks:
             await asyncio.gather(*list(ctx.tasks), return_exceptions=True)
 

@@ -183,9 +183,13 @@ class StandardAction(Behaviour):
                         # the predecessors of the start or the end: all reached (or
                         # none) needs no call, unless the plan is stopping
                         found = (ctx.start_waits if step == 0 else ctx.end_waits)[rt.index]
-                        if self._next == len(found) and (
-                            step or not (ctx.draining or ctx.cancelled)
-                        ):
+                        n = self._next
+                        for j, point in found[n:]:  # those that took place, in order
+                            other = ctx.actions[j]
+                            if not (other.start_reached if point == START else other.end_reached):
+                                break
+                            n += 1
+                        if n == len(found) and (step or not (ctx.draining or ctx.cancelled)):
                             status = _SUCCESS
                         else:
                             status, self._next = waits.wait_for_predecessors(

@@ -141,6 +141,9 @@ def default_template(nodes: ActionNodes) -> py_trees.behaviour.Behaviour:
     return nodes.default()
 
 
+_DONE = (Status.SUCCESS, Status.FAILURE)
+
+
 class PlanRoot(py_trees.composites.Composite):
     """Parallel root over the action branches; ticks only the active ones (see module
     docs) and succeeds once every branch is done (a branch records its own failure)."""
@@ -181,15 +184,23 @@ class PlanRoot(py_trees.composites.Composite):
         branch."""
         if self.status != Status.RUNNING:
             self._enter()
-        if self.ctx.touched:
+        ctx = self.ctx
+        if ctx.touched:
             self._touch()
-        for child in self._due():
+        # _due(), written out: no comprehension's call per tick
+        due = []
+        actions, children = ctx.actions, self.children
+        for index in sorted(ctx.active):
+            child = children[index]
+            if not actions[index].finished and child.status not in _DONE:
+                due.append(child)
+        for child in due:
             if type(child) is StandardAction:
                 child.tick_step()
             else:
                 for _ in child.tick():
                     pass
-        if self.ctx.unfinished:  # _settle(), inlined: a call per tick
+        if ctx.unfinished:  # _settle(), inlined: a call per tick
             self.status = Status.RUNNING
         else:
             self.stop(Status.SUCCESS)
@@ -198,12 +209,11 @@ class PlanRoot(py_trees.composites.Composite):
         """The branches a tick steps, in plan order: active (neither parked nor
         resting) and not over. Taken before the first is stepped: a branch only
         ever settles itself, so stepping one does not end another."""
-        done = (Status.SUCCESS, Status.FAILURE)
         actions, children = self.ctx.actions, self.children
         return [
             children[index]
             for index in sorted(self.ctx.active)
-            if not actions[index].finished and children[index].status not in done
+            if not actions[index].finished and children[index].status not in _DONE
         ]
 
     def _touch(self) -> None:
