@@ -31,6 +31,7 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
+from hypothesis import settings
 
 from plansys_bridge.clock import VirtualClock
 from plansys_bridge.hub.hub import Hub
@@ -45,6 +46,16 @@ pytest_plugins = ["pytester"]
 # tests start; Python's own handler back in place gives them the default again.
 if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
+
+# CI (CI=true) checks the same examples of each property on every run, so a change
+# lands or not on its own merits, not on the examples a run happened to draw; other
+# runs draw new examples each time, which is how new counterexamples are found.
+# HYPOTHESIS_PROFILE=ci or =random picks one explicitly.
+settings.register_profile("ci", derandomize=True, database=None)
+settings.register_profile("random")
+settings.load_profile(
+    os.environ.get("HYPOTHESIS_PROFILE") or ("ci" if os.environ.get("CI") else "random")
+)
 
 
 def _thread_grace() -> float:
