@@ -40,6 +40,7 @@ from plansys_bridge.hub.auction_policy import (
     full_action_name,
 )
 from plansys_bridge.hub.auction_supervision import Supervision
+from plansys_bridge.hub.client_table import ClientTable
 from plansys_bridge.hub.driven_future import DrivenFuture
 from plansys_bridge.hub.freed_watch import FreedWatch, Waiter, watch_of
 from plansys_bridge.hub.hub import Hub
@@ -52,8 +53,6 @@ from plansys_bridge.hub.messages import (
     action_execution,
     readdressed,
 )
-from plansys_bridge.hub.routing import client_keys
-from plansys_bridge.hub.transport import Subscription
 
 __all__ = [
     "ActionClient",
@@ -106,7 +105,12 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
     _freed = False
     """A matching performer went from RUNNING to READY: worth asking again now."""
     _liveness: LivenessTable | None = None
-    _sub: Subscription | None = None
+    # In the hub's table of clients (:mod:`.client_table`) once it listens: its place
+    # among the subscribers, whether it left, what the router calls (_on_action_msg)
+    _table: ClientTable | None = None
+    order = 0
+    closed = False
+    callback: Callable[[object], None]
     _timer: asyncio.TimerHandle | None = None
     _timer_at = math.inf
     _watch: FreedWatch
@@ -218,15 +222,20 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
         """Start an auction: the first (from ``start()``, as ``_launch``, after
         subscribing) or another after losing the performer."""
         loop = self._loop
-        if self._sub is None:  # the first: listen, and find what the hub shares
+        if self._table is None:  # the first: listen, and find what the hub shares
             hub = self.hub
             liveness = self._liveness = hub.liveness
             watch = FreedWatch.last
             if watch is None or watch.liveness() is not liveness:
                 watch = watch_of(liveness)
             self._watch = watch
-            keys = client_keys(self.request_id, self.action, self.arguments)
-            self._sub = hub.subscribe(_HUB, self._on_action_msg, keys=keys)
+            # join the table (ClientTable.join, inlined: once per action)
+            table = self._table = hub.clients
+            self.order = next(table.order)
+            self.callback = self._on_action_msg
+            held = table.by_request.setdefault(self.request_id, self)
+            if held is not self:
+                table.shared(held, self)
         self.phase = _AUCTION
         self.performer = ""
         self.completion = 0.0
@@ -381,9 +390,12 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
-        if self._sub is not None:
-            self._sub.close()
-            self._sub = None
+        table = self._table
+        if table is not None and not self.closed:  # leave (ClientTable.leave, inlined)
+            self.closed = True
+            held = table.by_request.pop(self.request_id, None)
+            if held is not self and held is not None:
+                table.unshare(held, self)
 
     def _arm(self, deadline: float) -> None:
         """Be woken at ``deadline`` (loop time). One timer serves every wait: one that

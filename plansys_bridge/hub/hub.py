@@ -6,6 +6,7 @@ from collections.abc import Callable, Hashable, Iterable, Sequence
 from typing import TYPE_CHECKING
 
 from plansys_bridge.clock import Clock, WallClock
+from plansys_bridge.hub.client_table import ClientTable
 from plansys_bridge.hub.liveness import LivenessTable
 from plansys_bridge.hub.messages import Topics
 from plansys_bridge.hub.routing import TopicRouter
@@ -81,9 +82,16 @@ class Hub:
     ``__getattr__``); from then on a plain attribute, read without a call (every
     auction client reads it, once per action)."""
 
+    clients: ClientTable
+    """The auction clients of ``actions_hub`` (:mod:`~plansys_bridge.hub.client_table`),
+    its router made on first use (by ``__getattr__``); then a plain attribute."""
+
     if not TYPE_CHECKING:  # (hidden from mypy: no other name may pass for an attribute)
 
-        def __getattr__(self, name: str) -> LivenessTable:
+        def __getattr__(self, name: str) -> LivenessTable | ClientTable:
+            if name == "clients" and "_routers" in self.__dict__:
+                clients = self.clients = self._router(Topics.ACTIONS_HUB).clients
+                return clients
             if name != "liveness" or "_routers" not in self.__dict__:
                 raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
             table = LivenessTable()
@@ -100,6 +108,7 @@ class Hub:
             router.close()
         self._routers.clear()
         self.__dict__.pop("liveness", None)  # a new table on next use
+        self.__dict__.pop("clients", None)
         await self.transport.close()
 
     def now(self) -> float:

@@ -26,6 +26,7 @@ from heapq import merge
 from itertools import count
 from typing import Any
 
+from plansys_bridge.hub.client_table import ClientTable
 from plansys_bridge.hub.messages import ActionExecution, ExecutionType, Topics
 from plansys_bridge.hub.transport import Subscription, redirect, report_subscriber_error
 
@@ -141,8 +142,12 @@ class _RoutedSubscription:
             self.closed = True
             self.router._remove(self)
 
-    def __lt__(self, other: _RoutedSubscription) -> bool:
-        return self.order < other.order
+    def __lt__(self, other: Any) -> bool:
+        return bool(self.order < other.order)
+
+    def __gt__(self, other: Any) -> bool:
+        """(A table's client, which has no ``<`` of its own, compares by this.)"""
+        return bool(self.order > other.order)
 
     def __repr__(self) -> str:
         state = "closed" if self.closed else "open"
@@ -224,6 +229,9 @@ class TopicRouter:
         """By the REQUEST route key ``("action", name)``."""
         self._router = _ROUTERS.get(topic)
         self._order = count()
+        self.clients = ClientTable(self._order)
+        """The auction clients, by request id (:mod:`~plansys_bridge.hub.client_table`):
+        one dictionary entry per client instead of a subscription."""
         self._transport_subscription: Subscription | None = None
 
     def add(
@@ -317,7 +325,7 @@ class TopicRouter:
             redirect(sub, self.dispatch)
 
     def __len__(self) -> int:
-        return len(self._everyone) + len(self._all_keyed)
+        return len(self._everyone) + len(self._all_keyed) + len(self.clients.everyone())
 
     def _targets(self, key: Hashable, msg: object) -> list[_RoutedSubscription] | tuple[()]:
         """The keyed subscribers ``msg`` (routed by ``key``) is for, in order."""
@@ -330,20 +338,37 @@ class TopicRouter:
             return found
         return list(merge(keyed, found)) if found else keyed
 
+    def _with_clients(self, key: Hashable, keyed: Sequence[Any]) -> Sequence[Any]:
+        """``keyed`` and the table's clients that ``key`` names, merged in order."""
+        table = self.clients
+        if not table.by_request or key.__class__ is not tuple:
+            return keyed
+        kind = key[0]
+        if kind == "request":
+            found: Sequence[Any] = table.for_request(key[1])
+        elif kind == "text":
+            found = table.for_text(key[1], key[2])
+        else:
+            return keyed
+        if not found:
+            return keyed
+        return list(merge(keyed, found)) if keyed else found
+
     def wants(self, msg: object) -> bool:
         """Would :meth:`dispatch` deliver ``msg`` to anybody now?"""
         if self._everyone:
             return True
         key = self._router(msg) if self._router is not None else None
         if key is None:
-            return bool(self._all_keyed)
-        return bool(self._targets(key, msg))
+            return bool(self._all_keyed) or bool(self.clients.by_request)
+        return bool(self._with_clients(key, self._targets(key, msg)))
 
     def dispatch(self, msg: object) -> None:
         """Deliver ``msg`` (called by the transport on the loop)."""
         everyone = self._everyone
         router = self._router
         key: Hashable | None
+        targets: Iterable[Any] | None = None
         if router is _action_route and msg.__class__ is ActionExecution:
             # _action_route, inlined: every message of every auction comes by here
             kind = msg.type
@@ -351,20 +376,35 @@ class TopicRouter:
                 key = ("action", msg.action)
             elif kind in _TO_CLIENT:
                 rid = msg.request_id
-                key = ("request", rid) if rid else _action_route(msg)
+                if not rid:
+                    key = _action_route(msg)
+                else:
+                    key = ("request", rid)
+                    held = self.clients.by_request.get(rid)
+                    if held is not None:
+                        # the client(s) of the table (ClientTable.for_request, inlined)
+                        mine: Sequence[Any] = held if held.__class__ is list else (held,)
+                        others = self._keyed.get(key)
+                        if others:
+                            mine = list(merge(others, mine))
+                        targets = merge(everyone, mine) if everyone else mine
             else:
                 key = ("node", msg.node_id)
         elif router is None:  # a topic without routes: everybody is in _everyone
             key = None
         else:
             key = router(msg)
-        targets: Iterable[_RoutedSubscription]
-        if key is None:
-            all_keyed = list(self._all_keyed) if self._all_keyed else None
+        if targets is not None:
+            pass
+        elif key is None:
+            all_keyed: list[Any] = list(self._all_keyed)
+            if self.clients.by_request:
+                all_keyed = sorted([*all_keyed, *self.clients.everyone()], key=_order)
             targets = merge(everyone, all_keyed) if all_keyed else everyone
         else:
             specialised = self._specialised
             index = specialised.get(key) if specialised else None
+            keyed: Sequence[Any]
             if index is None:
                 keyed = self._keyed.get(key, ())
             else:
@@ -377,6 +417,8 @@ class TopicRouter:
                     if found is not None and key not in self._keyed
                     else self._targets(key, msg)
                 )
+            if self.clients.by_request:
+                keyed = self._with_clients(key, keyed)
             if not keyed:
                 targets = everyone
             elif not everyone:
@@ -419,8 +461,13 @@ class TopicRouter:
             sub.closed = True
         self._everyone, self._keyed, self._all_keyed = [], {}, {}
         self._specialised_subs, self._specialised = {}, {}
+        self.clients.close()
         if self._transport_subscription is not None:
             self._transport_subscription.close()
+
+
+def _order(sub: Any) -> int:
+    return int(sub.order)
 
 
 def _running_loop() -> Any:

@@ -80,17 +80,12 @@ policy_st = st.builds(
 )
 
 
-def _simulate(
-    performers: list[dict[str, Any]],
-    actions: list[tuple[str, float, float | None]],
-    policy: AuctionPolicy,
-    seed: int,
-) -> tuple[
-    list[tuple[float, ActionExecution]], list[tuple[ActionOutcome, float]], list[CountingPerformer]
-]:
-    hub = Hub(InProcessTransport(), VirtualClock())
+def make_performers(
+    hub: Hub, performers: list[dict[str, Any]], seed: int
+) -> list[CountingPerformer]:
+    """The performers a scenario's ``performers`` describes, on ``hub`` (not started)."""
     ctx = PerformerContext(hub, hub.clock)
-    perfs = [
+    return [
         CountingPerformer(
             ctx,
             f"p{i}",
@@ -103,6 +98,18 @@ def _simulate(
         )
         for i, spec in enumerate(performers)
     ]
+
+
+def _simulate(
+    performers: list[dict[str, Any]],
+    actions: list[tuple[str, float, float | None]],
+    policy: AuctionPolicy,
+    seed: int,
+) -> tuple[
+    list[tuple[float, ActionExecution]], list[tuple[ActionOutcome, float]], list[CountingPerformer]
+]:
+    hub = Hub(InProcessTransport(), VirtualClock())
+    perfs = make_performers(hub, performers, seed)
     log: list[tuple[float, ActionExecution]] = []
 
     async def one(
