@@ -44,9 +44,18 @@ EVENTS: dict[str, Callable[[ProblemExpert, Executor], None] | None] = {
 SLOW_C3PO = [*PERFORMERS[:1], PerformerSpec("c3po_node", PERFORMERS[1].actions, {"move": 5.0})]
 
 
+LAST_WORD = 300.0
+"""Mission time of a cancel that ends a run still going then: without an at-start
+timeout, an action whose requirement an event broke for good waits forever (as
+PlanSys2's does), and so would the run. Every other run ends long before."""
+
+
 def _observed(plan: str, event: str, at: float, options: ExecutorOptions) -> tuple[object, ...]:
     action = EVENTS[event]
     events: list[Event] = [] if action is None else [(at, action)]
+    cancel = EVENTS["cancel"]
+    assert cancel is not None
+    events.append((LAST_WORD, cancel))
     return observe(PLANS[plan], SLOW_C3PO, options, events, _knowledge("(battery_full c3po)"))
 
 
@@ -74,6 +83,7 @@ def _wake_on_every_move(self: PlanContext) -> None:
 )
 @example(plan="chain", event="cancel", at=3.0, halt=False, timeout=None, patrol_template=False)
 @example(plan="cross", event="battery", at=3.0, halt=True, timeout=3.0, patrol_template=False)
+@example(plan="cross", event="corridor", at=0.0, halt=False, timeout=None, patrol_template=False)
 def test_waking_on_the_awaited_happening_matches_waking_on_every_move(
     plan: str, event: str, at: float, halt: bool, timeout: float | None, patrol_template: bool
 ) -> None:
