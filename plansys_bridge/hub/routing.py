@@ -355,9 +355,23 @@ class TopicRouter:
         return list(merge(keyed, found)) if keyed else found
 
     def wants(self, msg: object) -> bool:
-        """Would :meth:`dispatch` deliver ``msg`` to anybody now?"""
+        """Would :meth:`dispatch` deliver ``msg`` to anybody now? A DDS transport asks
+        this of each message it publishes, 400 per auction among 200 bidders: a
+        RESPONSE or REJECT is answered with the look-ups dispatch places it by."""
         if self._everyone:
             return True
+        if self._router is _action_route and msg.__class__ is ActionExecution:
+            kind = msg.type
+            rid = msg.request_id
+            fast: Hashable | None = None
+            if kind in _TO_NODE:
+                fast = ("node", msg.node_id)
+            elif rid and kind in _TO_CLIENT:
+                if rid in self.clients.by_request:
+                    return True
+                fast = ("request", rid)
+            if fast is not None and not (self._specialised and fast in self._specialised):
+                return bool(self._keyed.get(fast))
         key = self._router(msg) if self._router is not None else None
         if key is None:
             return bool(self._all_keyed) or bool(self.clients.by_request)
