@@ -195,9 +195,10 @@ class Executor:
                 on_info=on_info,
             )
             execution.context = ctx
-            self.hub.publish(
-                Topics.EXECUTING_PLAN, ExecutingPlan(current.to_msg(), execution.plan_id)
-            )
+            if self.hub.has_audience(Topics.EXECUTING_PLAN):
+                self.hub.publish(
+                    Topics.EXECUTING_PLAN, ExecutingPlan(current.to_msg(), execution.plan_id)
+                )
             await self._run(ctx, execution, goal)
             result.actions.extend([rt.record for rt in ctx.actions])
             if ctx.cancelled:
@@ -269,11 +270,9 @@ class Executor:
         unsubscribe = self.knowledge.subscribe(ctx.knowledge_changed)
         clock = self.hub.clock
         name = f"{ctx.plan_id}/{ctx.plan_index}"
-        dot = (
-            IncrementalDot(ctx.graph, self._goal_atoms(goal), name=name)
-            if self.options.publish_dot
-            else None
-        )
+        # the DOT text is made when somebody first listens (see _publish_dot), of the
+        # goal's atoms as they are now
+        dot = _LazyDot(ctx, self._goal_atoms(goal), name) if self.options.publish_dot else None
         timer: asyncio.TimerHandle | None = None
         armed_for: float | None = None
         dot_due: float | None = None  # the DOT's deadline last scheduled
@@ -367,8 +366,35 @@ class Executor:
         positive, _negative = self.evaluator.condition_atoms(target, {}, self.knowledge.state())
         return sorted(positive, key=str)
 
-    def _publish_dot(self, ctx: PlanContext, dot: IncrementalDot) -> None:
+    def _publish_dot(self, ctx: PlanContext, dot: _LazyDot) -> None:
         ctx.changed = False
-        for index in ctx.take_changed_steps():
-            dot.set_status(index, ctx.actions[index].record.status)
-        self.hub.publish(Topics.DOT_GRAPH, DotGraph(dot.text(), ctx.plan_id))
+        changed = ctx.take_changed_steps()
+        if not self.hub.has_audience(Topics.DOT_GRAPH):
+            return  # nobody to show it to (yet): the steps' states are read when made
+        made = dot.made
+        if made is None:
+            made = dot.make()
+        else:
+            for index in changed:
+                made.set_status(index, ctx.actions[index].record.status)
+        self.hub.publish(Topics.DOT_GRAPH, DotGraph(made.text(), ctx.plan_id))
+
+
+class _LazyDot:
+    """The plan's :class:`IncrementalDot`, made on its first publication with an
+    audience: its labels, edges and sub-goals cost about a tenth of executing a
+    plan of performers that cost nothing, for a graph nobody may be watching."""
+
+    def __init__(self, ctx: PlanContext, goal_atoms: list[Atom], name: str) -> None:
+        self.ctx = ctx
+        self.goal_atoms = goal_atoms
+        self.name = name
+        self.made: IncrementalDot | None = None
+
+    def make(self) -> IncrementalDot:
+        """The graph, each step in its state now (as publications since the start
+        would have left it)."""
+        made = self.made = IncrementalDot(self.ctx.graph, self.goal_atoms, name=self.name)
+        for index, rt in enumerate(self.ctx.actions):
+            made.set_status(index, rt.record.status)
+        return made

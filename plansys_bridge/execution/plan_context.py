@@ -40,6 +40,8 @@ __all__ = ["ActionRuntime", "EffectDelta", "PlanContext"]
 
 log = logging.getLogger(__name__)
 
+_INFO = Topics.ACTION_EXECUTION_INFO
+
 
 class PlanContext(BranchWakeups):
     """Everything the behaviours of one running plan share.
@@ -72,6 +74,7 @@ class PlanContext(BranchWakeups):
         # Mission time is read several times per action: the clock's bound method
         # saves a call each time.
         self.now = hub.clock.now  # type: ignore[method-assign]
+        self._info_heard = hub.has_audience
         self.actions: list[ActionRuntime] = []
         for i, (step, ground) in enumerate(zip(graph.steps, graph.ground, strict=True)):
             record = ActionRecord(
@@ -130,8 +133,11 @@ class PlanContext(BranchWakeups):
 
     def publish_info(self, rt: ActionRuntime, now: float | None = None) -> None:
         """Publish the action's ``ActionExecutionInfo``; ``now``: the mission time
-        the caller read already (the start time of an action that just started)."""
+        the caller read already (the start time of an action that just started).
+        Nothing is made when nobody would read it (no ``on_info``, no audience)."""
         self._changed_steps.add(rt.index)
+        if self.on_info is None and not self._info_heard(_INFO):
+            return
         rec = rt.record
         step = rt.step
         info = execution_info(
@@ -145,7 +151,7 @@ class PlanContext(BranchWakeups):
             rec.completion,
             rec.message,
         )
-        self.hub.publish(Topics.ACTION_EXECUTION_INFO, info)
+        self.hub.publish(_INFO, info)
         if self.on_info is not None:
             try:
                 self.on_info(info)

@@ -66,45 +66,53 @@ class StandardAction(Behaviour):
     """One action of the plan, from waiting for its predecessors to its at-end
     effects (see module docs)."""
 
+    # Behaviour.__init__'s attributes whose value starts the same for every action,
+    # and this behaviour's own state, read from the class until first set: a plan of
+    # thousands of actions makes each with two attribute writes
+    status = Status.INVALID
+    parent = None
+    feedback_message = ""
+    blackbox_level = BlackBoxLevel.NOT_A_BLACKBOX
+    _step = 0
+    """Index of the current phase; ``_RUN`` is the run."""
+    _entered = False
+    """Whether the at-start wait was entered (its deadline set up)."""
+    _next = 0
+    """How far through its predecessors the current wait got."""
+    _deadline: float | None = None
+    _timeout: float | None = None
+    """The at-start wait's state."""
+    _guarded = False
+    """Whether the guards of the run are set up (``_overrun`` then is one)."""
+    _overrun: phases.OverrunPhase | None = None
+    _execution: ExecutePhase | None = None
+
     def __init__(self, ctx: PlanContext, rt: ActionRuntime) -> None:
-        # Behaviour.__init__'s attributes, but for its uuid4 (from os.urandom), logger
-        # and tick generator, which are made on first use (__getattr__): a plan of
-        # thousands of actions asks for none of them unless it is stopped early.
-        name = f"{rt.step.text}:{rt.index}"
-        self.name = name
-        self.blackboards = []
-        self.qualified_name = f"{type(self).__qualname__}/{name}"
-        self.status = Status.INVALID
-        self.parent = None
-        self.children = []
-        self.feedback_message = ""
-        self.blackbox_level = BlackBoxLevel.NOT_A_BLACKBOX
+        # Behaviour.__init__'s other attributes (name, qualified name, lists of
+        # children and blackboards), its uuid4 (from os.urandom), logger and tick
+        # generator are made on first use (__getattr__): a plan of thousands of
+        # actions asks for none of them unless it is stopped early or shown.
         self.ctx = ctx
         self.rt = rt
-        self._step = 0
-        """Index of the current phase; ``_RUN`` is the run."""
-        self._entered = False
-        """Whether the at-start wait was entered (its deadline set up)."""
-        self._next = 0
-        """How far through its predecessors the current wait got."""
-        self._deadline: float | None = None
-        self._timeout: float | None = None
-        """The at-start wait's state."""
-        self._guarded = False
-        """Whether the guards of the run are set up (``_overrun`` then is one)."""
-        self._overrun: phases.OverrunPhase | None = None
-        self._execution: ExecutePhase | None = None
 
     def __getattr__(self, name: str) -> Any:
-        """py_trees' ``id``, ``logger`` and ``iterator``, made when first asked for
-        (as ``Behaviour.__init__`` makes them; the uuid is a fresh uuid4)."""
+        """What ``Behaviour.__init__`` makes, when first asked for (the uuid is a
+        fresh uuid4, the lists new ones)."""
         value: Any
-        if name == "id":
+        if name == "name":
+            value = f"{self.rt.step.text}:{self.rt.index}"
+        elif name == "qualified_name":
+            value = f"{type(self).__qualname__}/{self.name}"
+        elif name == "children" or name == "blackboards":
+            value = []
+        elif name == "id":
             value = uuid.uuid4()
         elif name == "logger":
             value = py_trees.logging.Logger(self.name)
         elif name == "iterator":
             value = self.tick()
+        elif name == "ctx" or name == "rt":  # not yet set (copy, pickle): no recursion
+            raise AttributeError(name)
         else:
             raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
         self.__dict__[name] = value

@@ -216,6 +216,11 @@ class AuthTransport:
     def __getattr__(self, name: str) -> Any:
         return getattr(self.inner, name)
 
+    def has_audience(self, topic: str) -> bool:
+        """Always yes: a signed topic's messages travel on the inner transport under
+        another name, so the inner transport's answer would not be about ``topic``."""
+        return True
+
     async def start(self) -> None:
         await self.inner.start()
 

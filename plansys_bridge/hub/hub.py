@@ -37,6 +37,13 @@ class Hub:
         )
         """``publish_many(topic, msgs)``: ``publish`` for each, in one call where the
         transport can (the REJECTs that end an auction)."""
+        self.has_audience: Callable[[str], bool] = getattr(self.transport, "has_audience", _anybody)
+        """``has_audience(topic)``: would a message published on ``topic`` now reach
+        anybody? What only informs (the plan's DOT graph, its execution info) is not
+        worked out for nobody, as a ROS node asks its publisher's subscription count
+        first. A transport that cannot tell (DDS: readers in other processes) does not
+        define it, and the answer is then always yes; the in-process transport answers
+        from its subscribers, so a subscriber made later gets the next message."""
 
     def _publish_each(self, topic: str, messages: Sequence[object]) -> None:
         for msg in messages:
@@ -117,3 +124,8 @@ class Hub:
 
     def __repr__(self) -> str:
         return f"Hub({type(self.transport).__name__}, {self.clock!r})"
+
+
+def _anybody(topic: str) -> bool:
+    """``has_audience`` of a transport that cannot tell: somebody may listen."""
+    return True

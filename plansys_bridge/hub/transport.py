@@ -168,6 +168,11 @@ class InProcessTransport:
     def subscriber_count(self, topic: str) -> int:
         return len(self._subscribers.get(topic, ()))
 
+    def has_audience(self, topic: str) -> bool:
+        """Would a message published on ``topic`` now reach a subscriber? (See
+        :attr:`Hub.has_audience <plansys_bridge.hub.hub.Hub.has_audience>`.)"""
+        return topic in self._subscribers
+
     def publish(self, topic: str, msg: object) -> None:
         if self._closed:
             raise HubError(f"cannot publish on {topic!r}: transport closed")

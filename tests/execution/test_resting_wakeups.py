@@ -46,7 +46,8 @@ def _context() -> PlanContext:
     k.set_function("(= (charge r2) 1)")
     graph = build_plan_graph(parse_plan(PLAN), DOMAIN, k.state())
     ctx = PlanContext(
-        hub=SimpleNamespace(clock=VirtualClock()),  # type: ignore[arg-type]  # only the clock
+        # only the clock, and whether the execution info has an audience (it has)
+        hub=SimpleNamespace(clock=VirtualClock(), has_audience=lambda topic: True),  # type: ignore[arg-type]
         knowledge=k,
         evaluator=k.evaluator,
         graph=graph,

@@ -179,7 +179,8 @@ def _context(plan_text: str) -> PlanContext:
     domain = load_domain("simple_example.pddl")
     graph = build_plan_graph(parse_plan(plan_text), domain, knowledge.state())
     return PlanContext(
-        hub=SimpleNamespace(clock=VirtualClock()),  # type: ignore[arg-type]  # only the clock is read
+        # only the clock is read, and whether the execution info has an audience (it has)
+        hub=SimpleNamespace(clock=VirtualClock(), has_audience=lambda topic: True),  # type: ignore[arg-type]
         knowledge=knowledge,
         evaluator=Evaluator(domain),
         graph=graph,
@@ -207,14 +208,16 @@ def test_a_deadline_wakes_its_resting_owner_only() -> None:
 
 
 def test_a_standard_action_has_what_a_py_trees_behaviour_has() -> None:
-    """StandardAction sets Behaviour.__init__'s attributes itself; its uuid, logger
-    and tick generator are made on first use, as py_trees would have made them."""
+    """StandardAction has Behaviour.__init__'s attributes without setting them in its
+    own __init__: the constant ones read from its class, the others (name, lists,
+    uuid, logger, tick generator) made on first use, as py_trees would have made them."""
     ctx = _context(PLAN)
     root = build_tree(ctx)
     first, second = root.children[:2]
+    assert set(vars(first)) == {"ctx", "rt", "parent"}  # parent: set by the root
+    assert first.name == "(patrol r2d2 kitchen):0"
     reference = py_trees.behaviours.Success(first.name)
     made_on_use = {"id", "logger", "iterator"}
-    assert set(vars(reference)) - set(vars(first)) == made_on_use
     for key, value in vars(reference).items():
         if key == "qualified_name":
             assert first.qualified_name == f"StandardAction/{first.name}"
@@ -223,6 +226,9 @@ def test_a_standard_action_has_what_a_py_trees_behaviour_has() -> None:
         elif key not in made_on_use:
             assert getattr(first, key) == value, key
     assert isinstance(first.id, uuid.UUID) and first.id == first.id != second.id
+    first.children.append(reference)  # each behaviour's lists are its own
+    assert first.children == [reference] and second.children == [] and second.blackboards == []
+    first.children.clear()
     assert first.logger.prefix == py_trees.logging.Logger(first.name).prefix
     ctx.hub.publish = lambda *_a: None  # type: ignore[attr-defined]  # the info is not looked at
     ctx.draining = True  # the branch ends at its first phase, without a performer
