@@ -382,8 +382,8 @@ class Executor:
 
 class _LazyDot:
     """The plan's :class:`IncrementalDot`, made on its first publication with an
-    audience: its labels, edges and sub-goals cost about a tenth of executing a
-    plan of performers that cost nothing, for a graph nobody may be watching."""
+    audience: its labels, edges and sub-goals are written for every action of the
+    plan at once, work wasted on a graph nobody watches."""
 
     def __init__(self, ctx: PlanContext, goal_atoms: list[Atom], name: str) -> None:
         self.ctx = ctx
