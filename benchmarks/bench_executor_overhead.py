@@ -10,12 +10,19 @@ over the plan sizes: ``per_action`` is the executor's overhead per action.
 ``--parts`` then runs the largest size once more and splits its CPU time into
 parts (plan graph, tree, knowledge, hub, performers: see ``executor_parts.py``).
 ``--calls`` counts the Python function calls per action of the largest size under
-cProfile: a figure that does not swing with the machine's speed.
+cProfile: a figure that does not swing with the machine's speed. ``--instructions``
+counts the machine instructions per action under valgrind's callgrind (needs
+``valgrind``; a few minutes): each of the smallest and the largest size is run in a
+process of its own, once executing its plan and once only making its world, with a
+fixed hash seed, and the difference of the executions' differences is divided by the
+difference of the sizes. Why: CPU time on a shared machine swings with its neighbours
+(this one runs the same code in 1x or 2x the time for seconds on end); the count of
+instructions does not, so two versions of the code compare on it run after run.
 
 Run::
 
     python benchmarks/bench_executor_overhead.py [--sizes 100 300 1000] [--robots 10] [--parts]
-        [--calls]
+        [--calls] [--instructions]
 """
 
 from __future__ import annotations
@@ -24,7 +31,12 @@ import argparse
 import contextlib
 import cProfile
 import gc
+import os
 import pstats
+import re
+import shutil
+import subprocess
+import sys
 import time
 from typing import Any
 
@@ -101,7 +113,16 @@ def main() -> None:
     parser.add_argument(
         "--calls", action="store_true", help="Python function calls per action (cProfile)"
     )
+    parser.add_argument(
+        "--instructions",
+        action="store_true",
+        help="machine instructions per action (valgrind's callgrind, a few minutes)",
+    )
+    parser.add_argument("--one-run", nargs=2, metavar=("ACTIONS", "WHAT"), help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.one_run:  # a child of --instructions: one run, counted from outside
+        one_run(int(args.one_run[0]), args.robots, args.one_run[1])
+        return
     rows = [measure(n, args.robots, args.repeat) for n in args.sizes]
     print(f"Executor CPU time with performers that cost nothing, {args.robots} robots")
     print(f"{'actions':>8} {'cpu s':>8} {'ms/action':>10}")
@@ -119,6 +140,8 @@ def main() -> None:
         print_parts(max(args.sizes), args.robots)
     if args.calls:
         print_calls(max(args.sizes), args.robots)
+    if args.instructions:
+        print_instructions(min(args.sizes), max(args.sizes), args.robots)
 
 
 def print_calls(actions: int, robots: int) -> None:
@@ -127,6 +150,57 @@ def print_calls(actions: int, robots: int) -> None:
     profile.runcall(run, _run(actions, robots, clock), clock)
     calls = pstats.Stats(profile).total_calls  # type: ignore[attr-defined]
     print(f"Python function calls (cProfile), {actions} actions: {calls / actions:.0f} per action")
+
+
+def one_run(actions: int, robots: int, what: str) -> None:
+    """``execute``: make the world and execute its plan; ``world``: only make it."""
+    if what == "world":
+        world(actions, robots)
+        return
+    gc.collect()
+    clock = VirtualClock()
+    run(_run(actions, robots, clock), clock)
+
+
+def _instructions(actions: int, robots: int, what: str) -> int:
+    """Instructions callgrind counts in a process making one run."""
+    command = [
+        "valgrind",
+        "--tool=callgrind",
+        "--callgrind-out-file=/dev/null",
+        sys.executable,
+        os.path.abspath(__file__),
+        "--robots",
+        str(robots),
+        "--one-run",
+        str(actions),
+        what,
+    ]
+    env = dict(os.environ, PYTHONHASHSEED="0")
+    done = subprocess.run(command, capture_output=True, text=True, env=env, check=False)
+    found = re.search(r"Collected : (\d+)", done.stderr)
+    if done.returncode != 0 or found is None:
+        raise RuntimeError(f"{' '.join(command)} failed ({done.returncode}): {done.stderr[-800:]}")
+    return int(found.group(1))
+
+
+def print_instructions(small: int, large: int, robots: int) -> None:
+    if shutil.which("valgrind") is None:
+        print("instructions: needs valgrind on PATH (apt-get install valgrind)")
+        return
+    if small == large:
+        print("instructions: needs two sizes or more (--sizes 100 1000)")
+        return
+    executed = {
+        n: _instructions(n, robots, "execute") - _instructions(n, robots, "world")
+        for n in (small, large)
+    }
+    per_action = (executed[large] - executed[small]) / (large - small)
+    print(
+        f"machine instructions (callgrind): {executed[small] / 1e6:.1f} M executing {small} "
+        f"actions, {executed[large] / 1e6:.1f} M executing {large}: "
+        f"{per_action / 1e3:.0f} k per action"
+    )
 
 
 def print_parts(actions: int, robots: int) -> None:

@@ -208,19 +208,25 @@ class ExecutePhase(Phase):
             request_id=rt.record.request_id,
             policy=ctx.options.auction,
         )
-        # partials, not lambdas: a callback is then one Python call, not two
+        # partials, not lambdas: a callback is then one Python call, not two. The end
+        # is told by the client as it settles the future (settled_cb), not by a done
+        # callback of the future, which the loop would schedule as a call of its own;
+        # the first step goes with the others of this tick (PlanContext.soon).
         future = self.task = client.start(
-            partial(ctx.feedback, rt), confirm_cb=partial(ctx.confirmed, rt), soon=True
+            partial(ctx.feedback, rt),
+            confirm_cb=partial(ctx.confirmed, rt),
+            soon=True,
+            settled_cb=self._ended,
+            call_soon=ctx.soon,
         )
-        # tracked as PlanContext.track does, with one done callback instead of two:
-        # the loop then schedules one call, not two, when the execution ends
-        ctx.tasks.add(future)
-        future.add_done_callback(self._ended)
+        ctx.tasks.add(future)  # as PlanContext.track does, without a done callback
 
-    def _ended(self, future: asyncio.Future[ActionOutcome]) -> None:
-        self.ctx.tasks.discard(future)
-        self.ctx.resume(self.rt.index)
-        self.ctx.wake()
+    def _ended(self) -> None:
+        ctx = self.ctx
+        if self.task is not None:
+            ctx.tasks.discard(self.task)
+        ctx.resume(self.rt.index)
+        ctx.wake()
 
     def step(self) -> Status:
         task = self.task

@@ -40,11 +40,11 @@ from plansys_bridge.hub.auction_policy import (
     full_action_name,
 )
 from plansys_bridge.hub.auction_supervision import Supervision
-from plansys_bridge.hub.client_table import ClientTable
+from plansys_bridge.hub.client_state import ClientState
 from plansys_bridge.hub.driven_future import DrivenFuture
-from plansys_bridge.hub.freed_watch import FreedWatch, Waiter, watch_of
+from plansys_bridge.hub.freed_watch import FreedWatch, watch_of
 from plansys_bridge.hub.hub import Hub
-from plansys_bridge.hub.liveness import LivenessTable, could_serve
+from plansys_bridge.hub.liveness import could_serve
 from plansys_bridge.hub.messages import (
     ActionExecution,
     ActionPerformerStatus,
@@ -78,7 +78,7 @@ _AUCTION = ClientPhase.AUCTION
 _EXECUTING = ClientPhase.EXECUTING
 
 
-class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
+class ActionClient(ClientState, Supervision, DrivenFuture[ActionOutcome]):
     """Runs the auction for one action instance and follows it to its end.
 
     ``await run()`` returns an :class:`ActionOutcome` (it never raises for a failed
@@ -86,48 +86,9 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
     awaits ``run()`` or the future ``start()`` returns. Either way the confirmed
     performer receives a CANCEL.
 
-    Following the confirmed performer is :class:`~.auction_supervision.Supervision`'s.
+    Following the confirmed performer is :class:`~.auction_supervision.Supervision`'s;
+    the client's state and its defaults are :class:`~.client_state.ClientState`'s.
     """
-
-    # Defaults read from the class until a client sets its own (immutable values):
-    # a client is made per executed action and most of these never change for it.
-    phase: ClientPhase = ClientPhase.NEW
-    performer = ""
-    """The confirmed performer's node name, once there is one."""
-    completion = 0.0
-    status = ""
-    requests_sent = 0
-    _cancel_requested = False
-    _cancel_sent_to: str | None = None
-    _last_seen = 0.0
-    _confirm_cb: Callable[[str], None] | None = None
-    _feedback_cb: FeedbackCallback | None = None
-    _freed = False
-    """A matching performer went from RUNNING to READY: worth asking again now."""
-    _liveness: LivenessTable | None = None
-    # In the hub's table of clients (:mod:`.client_table`) once it listens: its place
-    # among the subscribers, whether it left, what the router calls (_on_action_msg)
-    _table: ClientTable | None = None
-    order = 0
-    closed = False
-    callback: Callable[[object], None]
-    _timer: asyncio.TimerHandle | None = None
-    _timer_at = math.inf
-    _watch: FreedWatch
-    """The hub's clients waiting for a performer (:mod:`.freed_watch`)."""
-    _waiting: dict[Waiter, None] | None = None
-    """Where this client waits in ``_watch`` while in auction."""
-    # the action's auctions (one, more after a lost performer)
-    _excluded: frozenset[str] = frozenset()
-    _lost: tuple[str, ...] = ()
-    _reauctioned = 0
-    # the current auction (set by _begin_auction)
-    _start = 0.0
-    _give_up_at = 0.0
-    _sent = 0
-    _bids: list[tuple[float, int, str]]
-    _seen: set[str]
-    _bid_deadline = math.inf
 
     def __init__(
         self,
@@ -173,6 +134,8 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
         *,
         confirm_cb: Callable[[str], None] | None = None,
         soon: bool = False,
+        settled_cb: Callable[[], None] | None = None,
+        call_soon: Callable[..., object] | None = None,
     ) -> asyncio.Future[ActionOutcome]:
         """What :meth:`run` does, without a task (see :mod:`.driven_future`): send the
         first REQUEST and return the future of the outcome. Cancelling it stops the
@@ -183,7 +146,12 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
         now, where a task made to await :meth:`run` took its first step. The executor
         starts actions within a tick that may still halt them (``halt_on_failure``):
         a halted action then sends nothing, and the hub sees the messages in the
-        order a task gave, for one loop callback instead of three."""
+        order a task gave, for one loop callback instead of three. ``call_soon``
+        schedules that callback instead of the loop's (the executor's runs those of
+        one tick in one loop callback, in order).
+
+        ``settled_cb()`` is called right after the future is settled (see
+        :mod:`.driven_future`): what a done callback would do, without its loop callback."""
         # the outcome future, watched for a cancel from outside (inlined: once per action)
         if self._done is not None:
             raise HubError(f"{self!r}: start() may be called only once")
@@ -192,8 +160,9 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
         self._done = done
         done.add_done_callback(self._on_done)
         self._confirm_cb, self._feedback_cb = confirm_cb, feedback_cb
+        self._settled_cb = settled_cb
         if soon:
-            loop.call_soon(self._begin_soon, done)
+            (call_soon or loop.call_soon)(self._begin_soon, done)
         elif (exc := self._begin(done)) is not None:
             raise exc
         return done
@@ -377,6 +346,10 @@ class ActionClient(Supervision, DrivenFuture[ActionOutcome]):
         if done is not None and not done.done():
             done.remove_done_callback(self._on_done)
             done.set_result(outcome)
+            settled = self._settled_cb  # _notify, inlined
+            if settled is not None:
+                self._settled_cb = None
+                settled()
 
     def _fail(self, exc: Exception) -> None:
         """A callback raised: ``run()`` raises it, as when it was called there."""

@@ -10,12 +10,17 @@ outcome future itself and gives it what the task gave:
   cancelling the task did (a done callback, taken off again when the operation
   settles the future itself, so an ordinary end schedules no extra call);
 * the first step can be run now or in a loop callback scheduled now (where a task's
-  first step ran), and what it raises reaches whoever awaits the future.
+  first step ran), and what it raises reaches whoever awaits the future;
+* ``_settled_cb``, when given, is called as soon as the future is settled, in the
+  same call (or from the done callback after a cancel from outside): what a done
+  callback of the owner's would do, without the loop callback the future schedules
+  for each (the executor's, once per executed action).
 """
 
 from __future__ import annotations
 
 import asyncio
+from collections.abc import Callable
 from typing import Generic, TypeVar
 
 __all__ = ["DrivenFuture"]
@@ -31,6 +36,8 @@ class DrivenFuture(Generic[T]):
     _done: asyncio.Future[T] | None = None
     _loop: asyncio.AbstractEventLoop
     """The running loop, set when the future is made: only what runs after reads it."""
+    _settled_cb: Callable[[], None] | None = None
+    """Called once, right after the future is settled (see module docs)."""
 
     def _launch(self) -> None:  # pragma: no cover - every subclass implements it
         raise NotImplementedError
@@ -65,6 +72,7 @@ class DrivenFuture(Generic[T]):
             self._abandon()
             self._settled()
             done.set_exception(exc)
+            self._notify()
         except BaseException:
             self._abandon()
             raise
@@ -73,6 +81,14 @@ class DrivenFuture(Generic[T]):
         """The future ended without the operation settling it: cancelled from outside."""
         if done.cancelled():
             self._abandon()
+            self._notify()
+
+    def _notify(self) -> None:
+        """Call ``_settled_cb`` (once): the future has just been settled."""
+        settled = self._settled_cb
+        if settled is not None:
+            self._settled_cb = None
+            settled()
 
     def _settled(self) -> asyncio.Future[T] | None:
         """The future if it is the operation's to settle now (still pending), no longer
@@ -89,8 +105,10 @@ class DrivenFuture(Generic[T]):
         if done is not None and not done.done():
             done.remove_done_callback(self._on_done)
             done.set_result(value)
+            self._notify()
 
     def _reject(self, exc: BaseException) -> None:
         done = self._settled()
         if done is not None:
             done.set_exception(exc)
+            self._notify()

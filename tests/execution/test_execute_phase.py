@@ -70,7 +70,7 @@ def _task_initialise(self: ExecutePhase) -> None:
     )
     self.task = task
     ctx.tasks.add(task)
-    task.add_done_callback(self._ended)
+    task.add_done_callback(lambda _task: self._ended())
 
 
 def _battery_drop(knowledge: ProblemExpert, _e: Executor) -> None:

@@ -67,8 +67,9 @@ def test_only_phases_with_an_entry_step_are_entered() -> None:
 
 
 def test_an_ended_execution_is_untracked_and_wakes_the_executor() -> None:
-    """ExecutePhase tracks its task itself (one done callback): when the task ends
-    it leaves ``ctx.tasks``, its resting branch is active again and a tick is due."""
+    """ExecutePhase tracks its outcome future itself (told by the client as it
+    settles it): when it ends it leaves ``ctx.tasks``, its resting branch is active
+    again and a tick is due."""
     ctx = _context("0: (move r2d2 kitchen hall) [5]\n")
     rt = ctx.actions[0]
     woken: list[bool] = []
@@ -76,9 +77,9 @@ def test_an_ended_execution_is_untracked_and_wakes_the_executor() -> None:
     execution = phases.ExecutePhase(ctx, rt)
 
     async def body() -> None:
-        task = asyncio.get_running_loop().create_task(asyncio.sleep(0))
+        task = execution.task = asyncio.get_running_loop().create_task(asyncio.sleep(0))
         ctx.tasks.add(task)
-        task.add_done_callback(execution._ended)
+        task.add_done_callback(lambda _task: execution._ended())
         ctx.active.discard(rt.index)
         ctx.resting.add(rt.index)
         ctx._reads[rt.index] = frozenset()
