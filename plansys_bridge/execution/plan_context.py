@@ -121,7 +121,8 @@ class PlanContext(BranchWakeups):
             try:
                 callback(*args)
             except BaseException:
-                # what the loop would have done for this one; the rest keep their turn
+                # the loop reports it as it would have; the rest go on in a callback
+                # of their own, after what was queued meanwhile
                 rest = pending[i + 1 :]
                 if rest:
                     self._soon = rest + self._soon
