@@ -129,12 +129,23 @@ class AtStartReqPhase(Phase):
         super().__init__(ctx, rt)
         self.timeout = timeout
         self.deadline: float | None = None
+        self._waiting = False
 
     def initialise(self) -> None:
-        self.deadline = at_start_deadline(self.ctx, self.rt, self.timeout)
+        self.deadline = None
+        self._waiting = False
 
     def step(self) -> Status:
-        return wait_at_start_req(self.ctx, self.rt, self.deadline, self.timeout)
+        ctx, rt = self.ctx, self.rt
+        if not self._waiting:
+            if not (ctx.draining or ctx.cancelled) and ctx.holds(rt, rt.ground.at_start):
+                return Status.SUCCESS
+            # A wait begins: its deadline is registered only now (a requirement that
+            # holds at once waits for nothing, and a deadline registered for it
+            # anyway woke the executor for nothing when it came)
+            self._waiting = True
+            self.deadline = at_start_deadline(ctx, rt, self.timeout)
+        return wait_at_start_req(ctx, rt, self.deadline, self.timeout)
 
 
 class AtStartEffectPhase(Phase):

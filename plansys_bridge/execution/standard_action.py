@@ -204,14 +204,18 @@ class StandardAction(Behaviour):
                                 ctx, rt, START if step == 0 else END, found, self._next
                             )
                     elif step == 1:
-                        if not self._entered:  # its timeout and when it gives up
-                            self._entered = True
-                            self._enter_at_start_wait(ctx, rt)
                         if not (ctx.draining or ctx.cancelled) and ctx.evaluator.holds(
                             rt.ground.at_start, ctx.knowledge.state(), GROUND, rt.step.duration
                         ):
                             status = _SUCCESS
                         else:
+                            # A wait begins: its timeout, and when it gives up. Only
+                            # now: a requirement that holds at once (nearly all)
+                            # waits for nothing, and a deadline registered for it
+                            # anyway woke the executor for nothing when it came.
+                            if not self._entered:
+                                self._entered = True
+                                self._enter_at_start_wait(ctx, rt)
                             status = waits.wait_at_start_req(ctx, rt, self._deadline, self._timeout)
                     elif step == 2:
                         # phases.apply_at_start_effect, written out
