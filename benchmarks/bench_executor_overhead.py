@@ -15,9 +15,11 @@ counts the machine instructions per action under valgrind's callgrind (needs
 ``valgrind``; a few minutes): each of the smallest and the largest size is run in a
 process of its own, once executing its plan and once only making its world, with a
 fixed hash seed, and the difference of the executions' differences is divided by the
-difference of the sizes. Why: CPU time on a shared machine swings with its neighbours
-(this one runs the same code in 1x or 2x the time for seconds on end); the count of
-instructions does not, so two versions of the code compare on it run after run.
+difference of the sizes; the largest is run once more with the cyclic collector
+paused, which gives the collector's share. Why: CPU time on a shared machine swings
+with its neighbours (this one runs the same code in 1x or 2x the time for seconds on
+end); the count of instructions does not, so two versions of the code compare on it
+run after run.
 
 Run::
 
@@ -148,16 +150,30 @@ def print_calls(actions: int, robots: int) -> None:
     profile = cProfile.Profile()
     clock = VirtualClock()
     profile.runcall(run, _run(actions, robots, clock), clock)
-    calls = pstats.Stats(profile).total_calls  # type: ignore[attr-defined]
-    print(f"Python function calls (cProfile), {actions} actions: {calls / actions:.0f} per action")
+    stats = pstats.Stats(profile)
+    calls = stats.total_calls  # type: ignore[attr-defined]
+    # asyncio's own Python code (scheduling callbacks and timers, futures, tasks):
+    # what the loop costs, apart from what the executor asks of it
+    loop_calls = sum(
+        counts[1]
+        for (filename, _line, _name), counts in stats.stats.items()  # type: ignore[attr-defined]
+        if f"{os.sep}asyncio{os.sep}" in filename
+    )
+    print(
+        f"Python function calls (cProfile), {actions} actions: {calls / actions:.0f} per action, "
+        f"{loop_calls / actions:.0f} of them in asyncio's own code"
+    )
 
 
 def one_run(actions: int, robots: int, what: str) -> None:
-    """``execute``: make the world and execute its plan; ``world``: only make it."""
+    """``execute``: make the world and execute its plan; ``paused``: the same with
+    the cyclic collector paused; ``world``: only make the world."""
     if what == "world":
         world(actions, robots)
         return
     gc.collect()
+    if what == "paused":
+        gc.disable()
     clock = VirtualClock()
     run(_run(actions, robots, clock), clock)
 
@@ -191,15 +207,15 @@ def print_instructions(small: int, large: int, robots: int) -> None:
     if small == large:
         print("instructions: needs two sizes or more (--sizes 100 1000)")
         return
-    executed = {
-        n: _instructions(n, robots, "execute") - _instructions(n, robots, "world")
-        for n in (small, large)
-    }
+    made = {n: _instructions(n, robots, "world") for n in (small, large)}
+    executed = {n: _instructions(n, robots, "execute") - made[n] for n in (small, large)}
+    paused = _instructions(large, robots, "paused") - made[large]
     per_action = (executed[large] - executed[small]) / (large - small)
     print(
         f"machine instructions (callgrind): {executed[small] / 1e6:.1f} M executing {small} "
         f"actions, {executed[large] / 1e6:.1f} M executing {large}: "
-        f"{per_action / 1e3:.0f} k per action"
+        f"{per_action / 1e3:.0f} k per action; {paused / 1e6:.1f} M executing {large} with "
+        f"the cyclic collector paused (its share {1 - paused / executed[large]:.0%})"
     )
 
 

@@ -62,8 +62,7 @@ def test_the_router_wants_what_dispatch_delivers(
     for kind, value, action, arguments in steps:
         if kind == "performer":
             assert isinstance(value, str)
-            spec = [arguments] if arguments else [""]
-            keys = performer_keys(value, {action: spec[0:1] if arguments else []})
+            keys = performer_keys(value, {action: [arguments] if arguments else []})
             subs.append(router.add(heard.append, keys))
         elif kind == "keyed client":
             assert isinstance(value, str)
