@@ -252,6 +252,11 @@ class ExecutePhase(Phase):
         if exc is not None:
             return self.fail(f"execution failed: {exc!r}")
         outcome = task.result()
+        # the runtime lets its ended client go (its cycles were broken as it ended):
+        # a plan of thousands of actions would otherwise keep each one's client, its
+        # future and callbacks alive until the plan ends, for the cyclic collector
+        # to go through again and again
+        self.rt.client = None
         self.ctx.action_executed(self.rt, outcome)
         if outcome.success:
             return Status.SUCCESS

@@ -209,6 +209,7 @@ class PlanContext(BranchWakeups):
 
     def action_ended(self, rt: ActionRuntime) -> None:
         rt.end_reached = True
+        rt.start_delta = None  # undone only before the end (see rollback)
         if rt.record.end is None:
             rt.record.end = self.now()
         self.progress = self.changed = True

@@ -78,6 +78,10 @@ _AUCTION = ClientPhase.AUCTION
 _EXECUTING = ClientPhase.EXECUTING
 
 
+def _ignore(msg: object) -> None:
+    """An ended client's router callback (the router skips it anyway: it is closed)."""
+
+
 class ActionClient(ClientState, Supervision, DrivenFuture[ActionOutcome]):
     """Runs the auction for one action instance and follows it to its end.
 
@@ -366,6 +370,11 @@ class ActionClient(ClientState, Supervision, DrivenFuture[ActionOutcome]):
         table = self._table
         if table is not None and not self.closed:  # leave (ClientTable.leave, inlined)
             self.closed = True
+            # No cycle left through its own bound method or the caller's callbacks
+            # (which hold what holds the client): an ended client is freed as soon as
+            # nobody holds it, not by the cyclic collector (one per executed action).
+            self.callback = _ignore
+            self._confirm_cb = self._feedback_cb = None
             held = table.by_request.pop(self.request_id, None)
             if held is not self and held is not None:
                 table.unshare(held, self)
