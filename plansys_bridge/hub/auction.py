@@ -31,6 +31,7 @@ import math
 from collections.abc import Callable, Sequence
 
 from plansys_bridge.errors import HubError
+from plansys_bridge.hub.alarms import Alarms, alarms_of
 from plansys_bridge.hub.auction_policy import (
     ActionOutcome,
     AuctionPolicy,
@@ -314,7 +315,7 @@ class ActionClient(ClientState, Supervision, DrivenFuture[ActionOutcome]):
         self._last_seen = now = self._loop.time()
         self.completion = 0.0
         deadline = now + self.policy.liveness_timeout
-        if self._timer is None or self._timer_at > deadline:
+        if not self._alarm or self._timer_at > deadline:
             self._arm(deadline)
 
     def _give_up(self) -> None:
@@ -364,9 +365,8 @@ class ActionClient(ClientState, Supervision, DrivenFuture[ActionOutcome]):
         self.phase = ClientPhase.DONE
         if self._waiting is not None:
             self._auction_over()
-        if self._timer is not None:
-            self._timer.cancel()
-            self._timer = None
+        self._alarm = 0  # its alarm forgotten (Alarms.clear, inlined)
+        self._timer_at = math.inf
         table = self._table
         if table is not None and not self.closed:  # leave (ClientTable.leave, inlined)
             self.closed = True
@@ -380,18 +380,19 @@ class ActionClient(ClientState, Supervision, DrivenFuture[ActionOutcome]):
                 table.unshare(held, self)
 
     def _arm(self, deadline: float) -> None:
-        """Be woken at ``deadline`` (loop time). One timer serves every wait: one that
-        rings earlier is kept, and the wait is taken up again when it rings."""
-        timer = self._timer
-        if timer is not None:
-            if self._timer_at <= deadline:
-                return
-            timer.cancel()
+        """Be woken at ``deadline`` (loop time). One alarm serves every wait: one that
+        rings earlier is kept, and the wait is taken up again when it rings. The
+        alarm is the loop's (:mod:`.alarms`): one loop timer for every client."""
+        if self._alarm and self._timer_at <= deadline:
+            return
         self._timer_at = deadline
-        self._timer = self._loop.call_at(deadline, self._on_timer)
+        alarms = Alarms.last
+        loop = self._loop
+        if alarms is None or alarms.loop() is not loop:
+            alarms = alarms_of(loop)
+        alarms.set(deadline, self)
 
     def _on_timer(self) -> None:
-        self._timer = None
         self._timer_at = math.inf
         if self.phase is _AUCTION:
             self._auction_step()

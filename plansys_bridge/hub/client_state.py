@@ -9,7 +9,6 @@ client's state at a glance.
 
 from __future__ import annotations
 
-import asyncio
 import math
 from collections.abc import Callable
 
@@ -46,8 +45,11 @@ class ClientState:
     order = 0
     closed = False
     callback: Callable[[object], None]
-    _timer: asyncio.TimerHandle | None = None
+    _alarm = 0
+    """The number of the client's live alarm on its loop's :class:`~.alarms.Alarms`
+    (0: none)."""
     _timer_at = math.inf
+    """When that alarm rings."""
     _watch: FreedWatch
     """The hub's clients waiting for a performer (:mod:`.freed_watch`)."""
     _waiting: dict[Waiter, None] | None = None
