@@ -22,12 +22,18 @@ def happening_order(steps: Sequence[PlanStep]) -> list[int]:
     (rounded to the microsecond), ends of actions with a duration first, then by
     step, starts before ends. The keys are made in two comprehensions, without a
     key call (or an append) per happening; the times are rounded by ``map`` (no
-    bytecode per time), and a happening is its key's last item (``2*step+point``
-    orders as ``(step, point)``)."""
+    bytecode per time), each distinct one once, and a happening is its key's last
+    item (``2*step+point`` orders as ``(step, point)``)."""
     times = [step.time for step in steps]
     durations = [step.duration for step in steps]
-    starts = list(map(round, times, repeat(6)))
-    ends = list(map(round, map(add, times, durations), repeat(6)))
+    ends = list(map(add, times, durations))
+    # Each distinct time rounded once: ``round(t, 6)`` is a correctly rounded decimal
+    # (about half a microsecond a time), and the steps of a plan share few times
+    # (those running together start and end together).
+    distinct = {*times, *ends}
+    rounded = dict(zip(distinct, map(round, distinct, repeat(6)), strict=True)).__getitem__
+    starts = list(map(rounded, times))
+    ends = list(map(rounded, ends))
     keys = [(start, 1, 2 * i) for i, start in enumerate(starts)]
     keys += [
         (starts[i], 1, 2 * i + 1) if duration <= 0 else (ends[i], 0, 2 * i + 1)
