@@ -17,7 +17,8 @@ REJECT to the others, FEEDBACK while it works, FINISH when done, CANCEL to abort
 Only loop time is used (``loop.time()``, ``call_at``), so the client runs unchanged on
 the wall clock and on the virtual clock.
 
-The client is driven by its messages and one timer: each message is handled as the
+The client is driven by its messages and one alarm (on a loop timer every client of
+the loop shares, :mod:`.alarms`): each message is handled as the
 hub delivers it (a RESPONSE may confirm at once). A coroutine that woke for every
 message cost a task step, a future and a timer per wait, several times what handling
 the message costs; ``start()`` hands out the outcome future without even one task.
