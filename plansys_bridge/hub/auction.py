@@ -18,10 +18,10 @@ Only loop time is used (``loop.time()``, ``call_at``), so the client runs unchan
 the wall clock and on the virtual clock.
 
 The client is driven by its messages and one alarm (on a loop timer every client of
-the loop shares, :mod:`.alarms`): each message is handled as the
-hub delivers it (a RESPONSE may confirm at once). A coroutine that woke for every
-message cost a task step, a future and a timer per wait, several times what handling
-the message costs; ``start()`` hands out the outcome future without even one task.
+the loop shares, :mod:`.alarms`): each message is handled as the hub delivers it (a
+RESPONSE may confirm at once). A coroutine that woke for every message cost a task
+step, a future and a timer per wait, several times what handling the message costs;
+``start()`` hands out the outcome future without even one task.
 """
 
 from __future__ import annotations
