@@ -8,7 +8,8 @@ ticking it, the auctions on the hub, applying effects to the knowledge, the
 execution info. The CPU time of each run is fitted as ``per_plan + per_action * n``
 over the plan sizes: ``per_action`` is the executor's overhead per action.
 ``--parts`` then runs the largest size once more and splits its CPU time into
-parts (plan graph, tree, knowledge, hub, performers: see ``executor_parts.py``).
+parts (plan graph, tree, knowledge, hub, performers: see ``executor_parts.py``)
+and counts the cyclic collector's runs while it executes.
 ``--calls`` counts the Python function calls per action of the largest size under
 cProfile: a figure that does not swing with the machine's speed. ``--instructions``
 counts the machine instructions per action under valgrind's callgrind (needs
@@ -40,6 +41,7 @@ import shutil
 import subprocess
 import sys
 import time
+from collections import Counter
 from typing import Any
 
 from bench_graph import world
@@ -66,9 +68,11 @@ async def _run(
     clock: VirtualClock,
     parts: Parts | None = None,
     collect: bool = True,
+    collections: Counter[int] | None = None,
 ) -> float:
     """CPU seconds of executing the plan; ``collect=False`` pauses the cyclic
-    collector for the execution alone (not for making the world)."""
+    collector for the execution alone (not for making the world); ``collections``
+    counts the collector's runs during the execution, by generation."""
     domain, knowledge, plan = world(actions, robots)
     hub = Hub(InProcessTransport(), clock)
     await hub.start()
@@ -80,14 +84,21 @@ async def _run(
         await p.start()
     executor = Executor(hub, domain, knowledge, None, ExecutorOptions())
     timing = parts.timing() if parts is not None else contextlib.nullcontext()
+
+    def counted(phase: str, info: dict[str, Any]) -> None:
+        if phase == "start" and collections is not None:
+            collections[info["generation"]] += 1
+
     if not collect:
         gc.disable()
+    gc.callbacks.append(counted)
     try:
         c0 = time.process_time()
         with timing:
             result = await executor.execute(plan)
         cpu = time.process_time() - c0
     finally:
+        gc.callbacks.remove(counted)
         if not collect:
             gc.enable()
     for p in performers:
@@ -235,13 +246,18 @@ def print_instructions(small: int, large: int, robots: int) -> None:
 
 def print_parts(actions: int, robots: int) -> None:
     parts = Parts()
+    collections: Counter[int] = Counter()
     gc.collect()
     clock = VirtualClock()
-    run(_run(actions, robots, clock, parts), clock)
+    run(_run(actions, robots, clock, parts, collections=collections), clock)
     print(f"where the CPU time of {actions} actions goes (exclusive, ms per action):")
     for part, seconds in parts.seconds.most_common():
         print(f"  {seconds / actions * 1e3:7.3f}  {part}")
     print(f"  {sum(parts.seconds.values()) / actions * 1e3:7.3f}  total (timing included)")
+    print(
+        "cyclic collections while executing, by generation: "
+        + ", ".join(f"{g}: {collections[g]}" for g in range(3))
+    )
 
 
 if __name__ == "__main__":
