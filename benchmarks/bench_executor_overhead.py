@@ -17,10 +17,10 @@ counts the machine instructions per action under valgrind's callgrind (needs
 process of its own, once executing its plan and once only making its world, with a
 fixed hash seed, and the difference of the executions' differences is divided by the
 difference of the sizes; the largest is run once more with the cyclic collector
-paused, which gives the collector's share. Why: CPU time on a shared machine swings
-with its neighbours (this one runs the same code in 1x or 2x the time for seconds on
-end); the count of instructions does not, so two versions of the code compare on it
-run after run.
+paused while its plan executes, which gives the collector's share of the execution.
+Why: CPU time on a shared machine swings with its neighbours (this one runs the same
+code in 1x or 2x the time for seconds on end); the count of instructions does not, so
+two versions of the code compare on it run after run.
 
 Run::
 
@@ -86,19 +86,21 @@ async def _run(
     timing = parts.timing() if parts is not None else contextlib.nullcontext()
 
     def counted(phase: str, info: dict[str, Any]) -> None:
-        if phase == "start" and collections is not None:
+        if phase == "start" and collections is not None:  # (None: not registered)
             collections[info["generation"]] += 1
 
     if not collect:
         gc.disable()
-    gc.callbacks.append(counted)
+    if collections is not None:
+        gc.callbacks.append(counted)
     try:
         c0 = time.process_time()
         with timing:
             result = await executor.execute(plan)
         cpu = time.process_time() - c0
     finally:
-        gc.callbacks.remove(counted)
+        if collections is not None:
+            gc.callbacks.remove(counted)
         if not collect:
             gc.enable()
     for p in performers:

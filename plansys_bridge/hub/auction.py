@@ -316,7 +316,7 @@ class ActionClient(ClientState, Supervision, DrivenFuture[ActionOutcome]):
         self._last_seen = now = self._loop.time()
         self.completion = 0.0
         deadline = now + self.policy.liveness_timeout
-        if not self._alarm or self._timer_at > deadline:
+        if not self._alarm or self._alarm_at > deadline:
             self._arm(deadline)
 
     def _give_up(self) -> None:
@@ -367,15 +367,15 @@ class ActionClient(ClientState, Supervision, DrivenFuture[ActionOutcome]):
         if self._waiting is not None:
             self._auction_over()
         self._alarm = 0  # its alarm forgotten (Alarms.clear, inlined)
-        self._timer_at = math.inf
+        self._alarm_at = math.inf
+        # No cycle left through the caller's callbacks (which hold what holds the
+        # client) or, below, its own bound method in the table: an ended client is
+        # freed as soon as nobody holds it, not by the cyclic collector.
+        self._confirm_cb = self._feedback_cb = None
         table = self._table
         if table is not None and not self.closed:  # leave (ClientTable.leave, inlined)
             self.closed = True
-            # No cycle left through its own bound method or the caller's callbacks
-            # (which hold what holds the client): an ended client is freed as soon as
-            # nobody holds it, not by the cyclic collector (one per executed action).
             self.callback = _ignore
-            self._confirm_cb = self._feedback_cb = None
             held = table.by_request.pop(self.request_id, None)
             if held is not self and held is not None:
                 table.unshare(held, self)
@@ -384,9 +384,9 @@ class ActionClient(ClientState, Supervision, DrivenFuture[ActionOutcome]):
         """Be woken at ``deadline`` (loop time). One alarm serves every wait: one that
         rings earlier is kept, and the wait is taken up again when it rings. The
         alarm is the loop's (:mod:`.alarms`): one loop timer for every client."""
-        if self._alarm and self._timer_at <= deadline:
+        if self._alarm and self._alarm_at <= deadline:
             return
-        self._timer_at = deadline
+        self._alarm_at = deadline
         alarms = Alarms.last
         loop = self._loop
         if alarms is None or alarms.loop() is not loop:
@@ -394,7 +394,7 @@ class ActionClient(ClientState, Supervision, DrivenFuture[ActionOutcome]):
         alarms.set(deadline, self)
 
     def _on_timer(self) -> None:
-        self._timer_at = math.inf
+        self._alarm_at = math.inf
         if self.phase is _AUCTION:
             self._auction_step()
         elif self.phase is _EXECUTING:
@@ -470,7 +470,7 @@ class ActionClient(ClientState, Supervision, DrivenFuture[ActionOutcome]):
                         return
                     self._bid_deadline = self._loop.time() + policy.bid_window
                 elif (
-                    self._loop.time() < self._bid_deadline and self._timer_at <= self._bid_deadline
+                    self._loop.time() < self._bid_deadline and self._alarm_at <= self._bid_deadline
                 ):
                     return  # still collecting bids, the timer set: nothing else to do
         self._auction_step()

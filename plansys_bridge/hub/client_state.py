@@ -48,7 +48,7 @@ class ClientState:
     _alarm = 0
     """The number of the client's live alarm on its loop's :class:`~.alarms.Alarms`
     (0: none)."""
-    _timer_at = math.inf
+    _alarm_at = math.inf
     """When that alarm rings."""
     _watch: FreedWatch
     """The hub's clients waiting for a performer (:mod:`.freed_watch`)."""
