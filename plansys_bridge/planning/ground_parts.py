@@ -11,8 +11,8 @@ and building :class:`~plansys_bridge.knowledge.state.State` snapshots and
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Mapping
-from operator import itemgetter
 from typing import Protocol
 
 from plansys_bridge.pddl.model import Atom
@@ -25,47 +25,70 @@ class _Facts(Protocol):
     def has(self, predicate: str, args: Args) -> bool: ...
 
 
-def _getter(args: Args, names: Args) -> Callable[[Args], Args]:
-    """A function from a step's argument values (in parameter order) to ``args``
-    with them in place: one C call for the common all-parameters case."""
-    where = [names.index(a) if a in names else -1 for a in args]
-    if all(i >= 0 for i in where):
-        if len(where) > 1:
-            return itemgetter(*where)
-        if where:
-            only = where[0]
-            return lambda values: (values[only],)
-        return lambda values: ()
-    fixed = [(i, a) for i, a in zip(where, args, strict=True)]
-    return lambda values: tuple([values[i] if i >= 0 else a for i, a in fixed])
+AtomKey = tuple[str, Args]
+
+_Grounder = Callable[[Args], tuple[list[AtomKey], list[AtomKey], list[AtomKey], list[AtomKey]]]
+
+
+def _grounder(template: LiftedFootprint, names: Args) -> _Grounder:
+    return _generated(template.positive, template.negative, template.adds, template.deletes, names)
+
+
+@functools.lru_cache(maxsize=4096)
+def _generated(
+    positive: tuple[tuple[str, Args], ...],
+    negative: tuple[tuple[str, Args], ...],
+    adds: tuple[tuple[str, Args], ...],
+    deletes: tuple[tuple[str, Args], ...],
+    names: Args,
+) -> _Grounder:
+    """A function from a step's argument values (in the order of ``names``) to the
+    template's positive, negative, added and deleted atoms with them in place.
+
+    Why generated: grounding is done for each of a plan's happenings, and a body
+    that builds the four lists as literals (``[(p0, (v[0], v[2])), ...]``) is one
+    Python call where a loop per part and a getter per atom were a dozen; it was a
+    quarter of a validation. The source holds only generated names and indices: the
+    predicates and constant arguments (from the PDDL) are values in its namespace.
+    Generated functions are kept by the atoms they ground (compiling one costs more
+    than a validation grounds with it, and each validation has its own templates).
+    """
+    namespace: dict[str, object] = {}
+
+    def value(item: object) -> str:
+        name = f"k{len(namespace)}"
+        namespace[name] = item
+        return name
+
+    def argument(arg: str) -> str:
+        return f"v[{names.index(arg)}]" if arg in names else value(arg)
+
+    def atoms(items: tuple[tuple[str, Args], ...]) -> str:
+        out = []
+        for predicate, args in items:
+            inner = ", ".join([argument(a) for a in args])
+            out.append(f"({value(predicate)}, ({inner}{',' if len(args) == 1 else ''}))")
+        return "[" + ", ".join(out) + "]"
+
+    body = ", ".join([atoms(positive), atoms(negative), atoms(adds), atoms(deletes)])
+    exec(compile(f"def ground(v):\n    return ({body})\n", "<ground_parts>", "exec"), namespace)
+    return namespace["ground"]  # type: ignore[return-value]
 
 
 class CompiledParts:
-    """A template with, for each atom, the function that puts a step's arguments in
-    place (see :func:`_getter`), for one order of parameters."""
+    """A template with the function that puts a step's arguments in place (see
+    :func:`_grounder`), for one order of parameters."""
 
-    __slots__ = ("adds", "deletes", "negative", "positive", "template")
+    __slots__ = ("_ground", "template")
 
     def __init__(self, template: LiftedFootprint, names: Args) -> None:
         self.template = template
-        self.positive = [(p, _getter(a, names)) for p, a in template.positive]
-        self.negative = [(p, _getter(a, names)) for p, a in template.negative]
-        self.adds = [(p, _getter(a, names)) for p, a in template.adds]
-        self.deletes = [(p, _getter(a, names)) for p, a in template.deletes]
+        self._ground = _grounder(template, names)
 
     def ground(self, values: Args, bindings: Mapping[str, str]) -> GroundParts:
         """The parts of one happening whose arguments are ``values`` (``bindings``)."""
-        return GroundParts(
-            self.template,
-            bindings,
-            [(p, g(values)) for p, g in self.positive] if self.positive else [],
-            [(p, g(values)) for p, g in self.negative] if self.negative else [],
-            [(p, g(values)) for p, g in self.adds] if self.adds else [],
-            [(p, g(values)) for p, g in self.deletes] if self.deletes else [],
-        )
-
-
-AtomKey = tuple[str, Args]
+        positive, negative, adds, deletes = self._ground(values)
+        return GroundParts(self.template, bindings, positive, negative, adds, deletes)
 
 
 def _key_text(key: AtomKey) -> str:

@@ -11,6 +11,7 @@ from tasks import classical, concurrent, numeric, temporal
 from plansys_bridge.knowledge.evaluation import Evaluator
 from plansys_bridge.knowledge.state import State
 from plansys_bridge.pddl.model import Atom, DurativeAction
+from plansys_bridge.pddl.parser import parse_domain
 from plansys_bridge.planning.ground_parts import GroundParts
 from plansys_bridge.planning.mutex import Footprint, Footprints, interference
 from plansys_bridge.planning.planner import Planner
@@ -88,3 +89,41 @@ def test_the_working_state_keeps_the_last_change_of_each_atom() -> None:
     ).with_changes(deletes=[Atom("r", ("a",))])
     assert state == expected
     assert now.state() is state  # nothing pending: the same snapshot
+
+
+def test_compiled_parts_put_arguments_and_constants_in_place() -> None:
+    """The generated grounder: parameters by position (one used twice), constants of
+    the domain (text that is not a Python name), atoms of one and of no argument."""
+    domain = parse_domain(
+        """(define (domain g) (:requirements :strips :typing :durative-actions)
+        (:types thing) (:constants home-base - thing)
+        (:predicates (at ?a ?b - thing) (ready ?a - thing) (idle) (linked ?a ?b - thing))
+        (:durative-action go :parameters (?x ?y - thing) :duration (= ?duration 1)
+          :condition (and (at start (at ?x ?y)) (at start (idle))
+                          (at start (not (linked ?y ?y))) (over all (ready ?x)))
+          :effect (and (at start (not (at ?x ?y))) (at end (at ?x home-base))
+                       (at end (linked ?x ?x)))))""",
+        "<g>",
+    )
+    action = domain.actions[0]
+    assert isinstance(action, DurativeAction)
+    footprints = Footprints(Evaluator(domain))
+    names = tuple(p.name for p in action.parameters)
+    bindings = dict(zip(names, ("r1", "dock"), strict=True))
+    start = footprints.parts(action.at_start, action.start_effect, bindings)
+    end = footprints.parts(action.at_end, action.end_effect, bindings)
+    assert start is not None and end is not None
+    assert start.positive == [("at", ("r1", "dock")), ("idle", ())]
+    assert start.negative == [("linked", ("dock", "dock"))]
+    assert start.deletes == [("at", ("r1", "dock"))] and start.adds == []
+    assert end.adds == [("at", ("r1", "home-base")), ("linked", ("r1", "r1"))]
+    # the same atoms as the lifted footprint grounded the general way
+    template = footprints._template(action.at_end, action.end_effect)
+    assert template is not None
+    assert end.footprint() == template.ground(bindings)
+    # two steps of one action share the generated function, not their atoms
+    other = footprints.parts(action.at_end, action.end_effect, {"?x": "r2", "?y": "a"})
+    assert other is not None and other.adds == [
+        ("at", ("r2", "home-base")),
+        ("linked", ("r2", "r2")),
+    ]
