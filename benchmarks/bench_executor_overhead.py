@@ -9,7 +9,9 @@ execution info. The CPU time of each run is fitted as ``per_plan + per_action * 
 over the plan sizes: ``per_action`` is the executor's overhead per action.
 ``--parts`` then runs the largest size once more and splits its CPU time into
 parts (plan graph, tree, knowledge, hub, performers: see ``executor_parts.py``)
-and counts the cyclic collector's runs while it executes.
+and counts the cyclic collector's runs while it executes. Each run also times a
+fixed loop of additions (:func:`reference_ms`), which shows the speed the machine
+ran Python at: the same code takes about twice the time here in some stretches.
 ``--calls`` counts the Python function calls per action of the largest size under
 cProfile: a figure that does not swing with the machine's speed. ``--instructions``
 counts the machine instructions per action under valgrind's callgrind (needs
@@ -123,6 +125,24 @@ def measure(actions: int, robots: int, repeat: int) -> dict[str, Any]:
     return {"actions": actions, "robots": robots, "cpu_s": best}
 
 
+_REFERENCE_ADDITIONS = 2_000_000
+
+
+def reference_ms() -> float:
+    """CPU milliseconds of a fixed loop of additions (best of three): the speed the
+    machine ran Python at in this run. Why: the target is in milliseconds, and this
+    machine runs the same code at two speeds (its neighbours' load) for seconds or
+    minutes on end; the loop's time says which one a run saw."""
+    best = float("inf")
+    for _ in range(3):
+        c0 = time.process_time()
+        total = 0
+        for i in range(_REFERENCE_ADDITIONS):
+            total += i
+        best = min(best, time.process_time() - c0)
+    return best * 1e3
+
+
 def fit(rows: list[dict[str, Any]]) -> tuple[float, float]:
     """Least squares ``cpu = per_plan + per_action * actions``."""
     xs = [r["actions"] for r in rows]
@@ -165,6 +185,10 @@ def main() -> None:
         )
     else:
         print("fit: needs two sizes or more (--sizes 100 1000)")
+    print(
+        f"machine speed in this run: a plain Python loop of {_REFERENCE_ADDITIONS:,} additions "
+        f"took {reference_ms():.0f} ms (best of 3)"
+    )
     if args.parts:
         print_parts(max(args.sizes), args.robots)
     if args.calls:
