@@ -30,12 +30,8 @@ AtomKey = tuple[str, Args]
 _Grounder = Callable[[Args], tuple[list[AtomKey], list[AtomKey], list[AtomKey], list[AtomKey]]]
 
 
-def _grounder(template: LiftedFootprint, names: Args) -> _Grounder:
-    return _generated(template.positive, template.negative, template.adds, template.deletes, names)
-
-
 @functools.lru_cache(maxsize=4096)
-def _generated(
+def _grounder(
     positive: tuple[tuple[str, Args], ...],
     negative: tuple[tuple[str, Args], ...],
     adds: tuple[tuple[str, Args], ...],
@@ -47,9 +43,9 @@ def _generated(
 
     Why generated: grounding is done for each of a plan's happenings, and a body
     that builds the four lists as literals (``[(p0, (v[0], v[2])), ...]``) is one
-    Python call where a loop per part and a getter per atom were a dozen; it was a
-    quarter of a validation. The source holds only generated names and indices: the
-    predicates and constant arguments (from the PDDL) are values in its namespace.
+    Python call where a loop per part and a getter per atom were a dozen. The source
+    holds only generated names and indices: the predicates and constant arguments
+    (from the PDDL) are values in its namespace.
     Generated functions are kept by the atoms they ground (compiling one costs more
     than a validation grounds with it, and each validation has its own templates).
     """
@@ -83,7 +79,9 @@ class CompiledParts:
 
     def __init__(self, template: LiftedFootprint, names: Args) -> None:
         self.template = template
-        self._ground = _grounder(template, names)
+        self._ground = _grounder(
+            template.positive, template.negative, template.adds, template.deletes, names
+        )
 
     def ground(self, values: Args, bindings: Mapping[str, str]) -> GroundParts:
         """The parts of one happening whose arguments are ``values`` (``bindings``)."""

@@ -121,9 +121,15 @@ def test_compiled_parts_put_arguments_and_constants_in_place() -> None:
     template = footprints._template(action.at_end, action.end_effect)
     assert template is not None
     assert end.footprint() == template.ground(bindings)
-    # two steps of one action share the generated function, not their atoms
+    # another step of the action gets its own atoms
     other = footprints.parts(action.at_end, action.end_effect, {"?x": "r2", "?y": "a"})
     assert other is not None and other.adds == [
         ("at", ("r2", "home-base")),
         ("linked", ("r2", "r2")),
     ]
+    assert end.adds == [("at", ("r1", "home-base")), ("linked", ("r1", "r1"))]
+    # a later validation (its own footprints) reuses the generated function
+    again = Footprints(Evaluator(domain)).compiled(action.at_end, action.end_effect, names)
+    first = footprints.compiled(action.at_end, action.end_effect, names)
+    assert again is not None and first is not None and again is not first
+    assert again._ground is first._ground
