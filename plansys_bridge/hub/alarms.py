@@ -61,22 +61,21 @@ class Alarms:
     def set(self, when: float, who: Alarmed) -> None:
         """Ring ``who._on_timer()`` at ``when`` (loop time), replacing its live alarm."""
         heap = self._heap
-        while heap:  # stale heads go first: an ended client is not held
-            head = heap[0]
-            if head[2]._alarm == head[1]:
-                break
+        # stale heads go first: an ended client is not held
+        while heap and heap[0][2]._alarm != heap[0][1]:
             heappop(heap)
         number = who._alarm = next(self._numbers)
         heappush(heap, (when, number, who))
         if when < self._timer_at and not self._ringing:
-            if self._timer is not None:
-                self._timer.cancel()
-            self._timer_at = when
-            self._timer = self._call_at(when)
+            self._move_timer(when)
 
-    def _call_at(self, when: float) -> asyncio.TimerHandle | None:
+    def _move_timer(self, when: float) -> None:
+        """Set the loop timer for ``when``, in place of the one set before."""
+        if self._timer is not None:
+            self._timer.cancel()
+        self._timer_at = when
         loop = self.loop()
-        return None if loop is None else loop.call_at(when, self._ring)
+        self._timer = None if loop is None else loop.call_at(when, self._ring)
 
     @staticmethod
     def clear(who: Alarmed) -> None:
@@ -123,10 +122,7 @@ class Alarms:
         while heap and heap[0][2]._alarm != heap[0][1]:
             heappop(heap)
         if heap and heap[0][0] < self._timer_at:
-            if self._timer is not None:
-                self._timer.cancel()
-            when = self._timer_at = heap[0][0]
-            self._timer = self._call_at(when)
+            self._move_timer(heap[0][0])
 
 
 _by_loop: WeakKeyDictionary[asyncio.AbstractEventLoop, Alarms] = WeakKeyDictionary()

@@ -45,9 +45,9 @@ def _grounder(
     that builds the four lists as literals (``[(p0, (v[0], v[2])), ...]``) is one
     Python call where a loop per part and a getter per atom were a dozen. The source
     holds only generated names and indices: the predicates and constant arguments
-    (from the PDDL) are values in its namespace.
-    Generated functions are kept by the atoms they ground (compiling one costs more
-    than a validation grounds with it, and each validation has its own templates).
+    (from the PDDL) are values in its namespace. Generated functions are kept by the
+    atoms they ground (compiling one costs more than a validation grounds with it,
+    and each validation has its own templates).
     """
     namespace: dict[str, object] = {}
 
